@@ -1,0 +1,172 @@
+// evaluate_trajectory: ATE / RPE of an estimated trajectory against ground truth.
+//
+//   evaluate_trajectory --est EST --gt GT [--max-dt 0.01] [--time-offset 0] [--rpe-delta 1.0]
+//                       [--rpe-delta-t 1.0] [--align all|se3|sim3|first|none]
+//                       [--log-level info] [--json OUT.json]
+//
+// Both files are TUM ("t tx ty tz qx qy qz qw") or EuRoC ground-truth CSV, detected by
+// content. Exit codes: 0 success, 1 data error (unreadable / inconsistent input, nothing
+// to align), 2 usage error.
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "mrvs/core/log.h"
+#include "mrvs/eval/report.h"
+#include "mrvs/io/trajectory_io.h"
+
+namespace {
+
+constexpr int kDataError = 1;
+constexpr int kUsageError = 2;
+
+struct Args {
+  std::string est_path;
+  std::string gt_path;
+  double max_dt_s = 0.01;
+  double time_offset_s = 0.0;
+  double rpe_delta_m = 1.0;
+  double rpe_delta_s = 1.0;
+  std::string align = "all";
+  std::string log_level = "info";
+  std::string json_path;
+};
+
+void add_options(CLI::App& app, Args& args) {
+  app.add_option("--est", args.est_path, "Estimated trajectory (TUM txt or EuRoC ground-truth CSV), T_w_b")
+      ->required();
+  app.add_option("--gt", args.gt_path, "Ground-truth trajectory (TUM txt or EuRoC ground-truth CSV), T_w_b")
+      ->required();
+  app.add_option(
+         "--max-dt", args.max_dt_s,
+         "Association tolerance in seconds: ground truth is interpolated between samples within this "
+         "distance of an estimate stamp, else the nearest sample within it is used, else the estimate "
+         "pose is unmatched")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
+  app.add_option("--time-offset", args.time_offset_s,
+                 "Seconds added to every estimate stamp before association (t_gt = t_est + offset)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1e6, 1e6));
+  app.add_option("--rpe-delta", args.rpe_delta_m,
+                 "RPE step in metres of travelled ground-truth path (pairs closest to this distance)")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-9, 1e9));
+  app.add_option("--rpe-delta-t", args.rpe_delta_s,
+                 "RPE step in seconds (pairs closest to this time); 0 disables")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e9));
+  app.add_option(
+         "--align", args.align,
+         "Alignments reported besides the unaligned ATE: se3 (Umeyama rigid), sim3 (Umeyama with scale; "
+         "its scale is also applied to RPE), first (first pose), none, or all (se3, sim3 and first)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"all", "se3", "sim3", "first", "none"}));
+  app.add_option("--log-level", args.log_level, std::string("Log level: ") + mrvs::kLogLevelNames)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
+  app.add_option("--json", args.json_path, "Also write every figure as JSON to this file");
+  app.footer(
+      "Output: a human-readable summary, then machine-readable lines 'KEY: value': MATCHED_POSES, "
+      "UNMATCHED_POSES, ATE_RMSE_m and ATE_ROT_RMSE_deg (unaligned), ATE_RMSE_SE3_m, ATE_ROT_RMSE_SE3_deg, "
+      "ATE_RMSE_SIM3_m, ATE_ROT_RMSE_SIM3_deg, SIM3_SCALE, ATE_RMSE_FIRST_m, ATE_ROT_RMSE_FIRST_deg (per "
+      "alignment), RPE_TRANS_RMSE_m, RPE_ROT_RMSE_deg, RPE_PAIRS (per --rpe-delta metres), "
+      "RPE_TIME_TRANS_RMSE_m, "
+      "RPE_TIME_ROT_RMSE_deg, RPE_TIME_PAIRS (per --rpe-delta-t seconds; 'nan' when the trajectory is too "
+      "short).\nExit codes: 0 success, 1 data error, 2 usage error.");
+}
+
+std::vector<mrvs::eval::AlignmentMethod> alignments_for(const std::string& align) {
+  using mrvs::eval::AlignmentMethod;
+  if (align == "all") return {AlignmentMethod::kSE3, AlignmentMethod::kSim3, AlignmentMethod::kFirstPose};
+  if (align == "se3") return {AlignmentMethod::kSE3};
+  if (align == "sim3") return {AlignmentMethod::kSim3};
+  if (align == "first") return {AlignmentMethod::kFirstPose};
+  return {};
+}
+
+/// Reads one trajectory, logging reader warnings; the error names the file.
+mrvs::StatusOr<mrvs::io::Trajectory> read_input(const std::string& path, const char* what) {
+  mrvs::io::Warnings warnings;
+  auto trajectory = mrvs::io::read_trajectory(path, {}, &warnings);
+  for (const std::string& w : warnings) spdlog::warn("{}", w);
+  if (!trajectory.ok()) {
+    return absl::Status(trajectory.status().code(),
+                        fmt::format("cannot read {} trajectory '{}': {}", what, path,
+                                    std::string(trajectory.status().message())));
+  }
+  spdlog::info("read {} poses from {} trajectory {}", trajectory->size(), what, path);
+  return trajectory;
+}
+
+int run(const Args& args) {
+  auto est = read_input(args.est_path, "estimate");
+  if (!est.ok()) {
+    fmt::print(stderr, "evaluate_trajectory: error: {}\n", std::string(est.status().message()));
+    return kDataError;
+  }
+  auto gt = read_input(args.gt_path, "ground-truth");
+  if (!gt.ok()) {
+    fmt::print(stderr, "evaluate_trajectory: error: {}\n", std::string(gt.status().message()));
+    return kDataError;
+  }
+  mrvs::eval::EvaluationOptions options;
+  options.association.max_dt_ns = mrvs::from_seconds(args.max_dt_s);
+  options.association.time_offset_ns = mrvs::from_seconds(args.time_offset_s);
+  options.alignments = alignments_for(args.align);
+  options.rpe_delta_m = args.rpe_delta_m;
+  options.rpe_delta_s = args.rpe_delta_s;
+  options.rpe_use_sim3_scale = args.align == "sim3";
+  auto report = mrvs::eval::evaluate(*est, *gt, options);
+  if (!report.ok()) {
+    fmt::print(stderr, "evaluate_trajectory: error: evaluating '{}' against '{}': {}\n", args.est_path,
+               args.gt_path, std::string(report.status().message()));
+    return kDataError;
+  }
+  report->estimate_file = args.est_path;
+  report->ground_truth_file = args.gt_path;
+  for (const std::string& note : report->notes) spdlog::warn("{}", note);
+  if (report->num_unmatched > 0) {
+    spdlog::warn("{} of {} estimate poses have no ground truth within {} s", report->num_unmatched,
+                 report->num_estimate_poses, args.max_dt_s);
+  }
+  fmt::print("{}\n{}", mrvs::eval::format_summary(*report), mrvs::eval::format_key_values(*report));
+  std::fflush(stdout);
+  if (!args.json_path.empty()) {
+    std::ofstream out(args.json_path);
+    out << mrvs::eval::to_json(*report);
+    out.close();
+    if (!out) {
+      fmt::print(stderr, "evaluate_trajectory: error: cannot write JSON file '{}'\n", args.json_path);
+      return kDataError;
+    }
+    spdlog::info("wrote {}", args.json_path);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "Evaluates an estimated trajectory against ground truth: association by timestamp (interpolated ground "
+      "truth), absolute trajectory error (unaligned and aligned) and relative pose error.",
+      "evaluate_trajectory"};
+  Args args;
+  add_options(app, args);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : kUsageError;
+  }
+  const mrvs::Status logging = mrvs::configure_logging(args.log_level);
+  if (!logging.ok()) {
+    fmt::print(stderr, "evaluate_trajectory: error: {}\n", std::string(logging.message()));
+    return kUsageError;
+  }
+  return run(args);
+}
