@@ -11,6 +11,7 @@
 # edge_client over DDS, and evaluate the real estimate.
 #
 # Usage: scripts/demo.sh [--out DIR]   (default: build/demo)
+# Environment: MRVS_SHARED_DIR (default ../shared next to the repository).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
 
@@ -23,7 +24,7 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 
-data=$MRVS_ROOT/../shared/data/euroc_groundtruth
+data=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}/data/euroc_groundtruth
 [[ -d $data ]] || { echo "demo.sh: missing $data (the shared EuRoC ground truth)" >&2; exit 1; }
 
 mrvs_build --target evaluate_trajectory

@@ -11,14 +11,12 @@
 #include <gtest/gtest.h>
 
 #include "mrvs/io/trajectory_io.h"
+#include "mrvs/test/shared_data.h"
 #include "mrvs/test/temp_dir.h"
 #include "synthetic.h"
 
 #ifndef MRVS_EVALUATE_TRAJECTORY
 #error "MRVS_EVALUATE_TRAJECTORY (path of the executable) must be defined by the build"
-#endif
-#ifndef MRVS_SOURCE_DIR
-#error "MRVS_SOURCE_DIR (repository root) must be defined by the build"
 #endif
 
 namespace mrvs::eval {
@@ -110,9 +108,9 @@ TEST(EvalTool, SyntheticShiftedCopyWithTimeOffsetAndJson) {
 }
 
 TEST(EvalTool, EurocGroundTruthAgainstShiftedCopy) {
-  const std::filesystem::path gt_path =
-      std::filesystem::path(MRVS_SOURCE_DIR) / "../shared/data/euroc_groundtruth/V1_01_easy.txt";
-  if (!std::filesystem::exists(gt_path)) GTEST_SKIP() << "dataset file not present: " << gt_path;
+  const std::filesystem::path gt_path = mrvs::test::euroc_groundtruth_file("V1_01_easy.txt");
+  ASSERT_TRUE(std::filesystem::exists(gt_path))
+      << "missing " << gt_path << " (configure with -DMRVS_SHARED_DIR=...)";
   auto gt = io::read_trajectory(gt_path);
   ASSERT_TRUE(gt.ok()) << gt.status();
   const mrvs::test::TempDir dir;

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "mrvs/io/trajectory_io.h"
+#include "mrvs/test/shared_data.h"
 #include "mrvs/test/temp_dir.h"
 
 namespace mrvs::io {
@@ -364,8 +365,9 @@ TEST(ReadTrajectory, DetectsFormatsByContent) {
 class RealEurocGroundTruth : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(RealEurocGroundTruth, ReadsAt200HzWithUnitQuaternions) {
-  const std::filesystem::path path = std::filesystem::path("../shared/data/euroc_groundtruth") / GetParam();
-  ASSERT_TRUE(std::filesystem::exists(path)) << "run from the repository root; missing " << path;
+  const std::filesystem::path path = test::euroc_groundtruth_file(GetParam());
+  ASSERT_TRUE(std::filesystem::exists(path))
+      << "missing " << path << " (configure with -DMRVS_SHARED_DIR=...)";
   Warnings warnings;
   const auto traj = read_trajectory(path, {}, &warnings);
   ASSERT_TRUE(traj.ok()) << traj.status();
@@ -389,7 +391,7 @@ INSTANTIATE_TEST_SUITE_P(Files, RealEurocGroundTruth,
                          ::testing::Values("V1_01_easy.txt", "V1_02_medium.txt", "V2_01_easy.txt"));
 
 TEST(RealEurocGroundTruthValues, FirstRowOfV101) {
-  const auto traj = read_tum_trajectory("../shared/data/euroc_groundtruth/V1_01_easy.txt");
+  const auto traj = read_tum_trajectory(test::euroc_groundtruth_file("V1_01_easy.txt"));
   ASSERT_TRUE(traj.ok()) << traj.status();
   // "1403715274.30214 0.878612 2.142470 0.947262 -0.828459 -0.058956 -0.553641 0.060514"
   EXPECT_EQ(traj->front().t_ns, std::int64_t{1403715274302140000});
