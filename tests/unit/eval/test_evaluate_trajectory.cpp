@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "mrvs/io/trajectory_io.h"
+#include "mrvs/test/run_tool.h"
 #include "mrvs/test/shared_data.h"
 #include "mrvs/test/temp_dir.h"
 #include "synthetic.h"
@@ -25,37 +26,11 @@ namespace {
 constexpr TimestampNs kT0 = 1'403'715'273'262'142'976;
 constexpr DurationNs kMs = 1'000'000;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string output;  ///< stdout and stderr
-};
+using test::quoted;
+using test::RunResult;
+using test::value_of;
 
-/// Runs the tool with `args` (already shell-quoted where needed).
-RunResult run_tool(const std::string& args) {
-  const std::string command = std::string("'") + MRVS_EVALUATE_TRAJECTORY + "' " + args + " 2>&1";
-  RunResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) {
-    ADD_FAILURE() << "popen failed: " << command;
-    return result;
-  }
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.output.append(buffer, n);
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
-
-/// Value of the "KEY: value" line, NaN when the key is missing.
-double value_of(const std::string& text, const std::string& key) {
-  const std::string needle = "\n" + key + ": ";
-  const std::size_t pos = ("\n" + text).find(needle);
-  if (pos == std::string::npos) return std::nan("");
-  return std::stod(text.substr(pos + needle.size() - 1));
-}
+RunResult run_tool(const std::string& args) { return test::run_tool(MRVS_EVALUATE_TRAJECTORY, args); }
 
 io::Trajectory shifted(const io::Trajectory& trajectory, const Vec3d& t, DurationNs dt_ns) {
   io::Trajectory out = synthetic::transform(SE3d(Quatd::Identity(), t), trajectory);
