@@ -15,14 +15,12 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "mrvs/core/cli.h"
 #include "mrvs/core/log.h"
 #include "mrvs/eval/report.h"
 #include "mrvs/io/trajectory_io.h"
 
 namespace {
-
-constexpr int kDataError = 1;
-constexpr int kUsageError = 2;
 
 struct Args {
   std::string est_path;
@@ -66,9 +64,7 @@ void add_options(CLI::App& app, Args& args) {
          "its scale is also applied to RPE), first (first pose), none, or all (se3, sim3 and first)")
       ->capture_default_str()
       ->check(CLI::IsMember({"all", "se3", "sim3", "first", "none"}));
-  app.add_option("--log-level", args.log_level, std::string("Log level: ") + mrvs::kLogLevelNames)
-      ->capture_default_str()
-      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
+  mrvs::add_log_level_option(app, args.log_level);
   app.add_option("--json", args.json_path, "Also write every figure as JSON to this file");
   app.footer(
       "Output: a human-readable summary, then machine-readable lines 'KEY: value': MATCHED_POSES, "
@@ -107,12 +103,12 @@ int run(const Args& args) {
   auto est = read_input(args.est_path, "estimate");
   if (!est.ok()) {
     fmt::print(stderr, "evaluate_trajectory: error: {}\n", std::string(est.status().message()));
-    return kDataError;
+    return mrvs::kExitDataError;
   }
   auto gt = read_input(args.gt_path, "ground-truth");
   if (!gt.ok()) {
     fmt::print(stderr, "evaluate_trajectory: error: {}\n", std::string(gt.status().message()));
-    return kDataError;
+    return mrvs::kExitDataError;
   }
   mrvs::eval::EvaluationOptions options;
   options.association.max_dt_ns = mrvs::from_seconds(args.max_dt_s);
@@ -125,7 +121,7 @@ int run(const Args& args) {
   if (!report.ok()) {
     fmt::print(stderr, "evaluate_trajectory: error: evaluating '{}' against '{}': {}\n", args.est_path,
                args.gt_path, std::string(report.status().message()));
-    return kDataError;
+    return mrvs::kExitDataError;
   }
   report->estimate_file = args.est_path;
   report->ground_truth_file = args.gt_path;
@@ -142,7 +138,7 @@ int run(const Args& args) {
     out.close();
     if (!out) {
       fmt::print(stderr, "evaluate_trajectory: error: cannot write JSON file '{}'\n", args.json_path);
-      return kDataError;
+      return mrvs::kExitDataError;
     }
     spdlog::info("wrote {}", args.json_path);
   }
@@ -158,15 +154,6 @@ int main(int argc, char** argv) {
       "evaluate_trajectory"};
   Args args;
   add_options(app, args);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : kUsageError;
-  }
-  const mrvs::Status logging = mrvs::configure_logging(args.log_level);
-  if (!logging.ok()) {
-    fmt::print(stderr, "evaluate_trajectory: error: {}\n", std::string(logging.message()));
-    return kUsageError;
-  }
+  if (auto exit_code = mrvs::parse_command_line(app, argc, argv, args.log_level)) return *exit_code;
   return run(args);
 }

@@ -10,13 +10,11 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "mrvs/core/cli.h"
 #include "mrvs/core/log.h"
 #include "mrvs/io/dataset.h"
 
 namespace {
-
-constexpr int kDataError = 1;
-constexpr int kUsageError = 2;
 
 struct Args {
   std::string dataset;
@@ -32,7 +30,7 @@ int run(const Args& args) {
   auto dataset = mrvs::io::open_dataset(args.format, options);
   if (!dataset.ok()) {
     fmt::print(stderr, "dataset_info: error: {}\n", std::string(dataset.status().message()));
-    return kDataError;
+    return mrvs::kExitDataError;
   }
   const mrvs::io::DatasetReader& reader = **dataset;
   fmt::print("{}\n", reader.summary().describe());
@@ -59,16 +57,7 @@ int main(int argc, char** argv) {
                  "Seconds by which cam0 and cam1 stamps of one stereo pair may differ (EuRoC: 0, exact)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--log-level", args.log_level, mrvs::kLogLevelNames)->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : kUsageError;
-  }
-  const mrvs::Status logging = mrvs::configure_logging(args.log_level);
-  if (!logging.ok()) {
-    fmt::print(stderr, "dataset_info: error: {}\n", std::string(logging.message()));
-    return kUsageError;
-  }
+  mrvs::add_log_level_option(app, args.log_level);
+  if (auto exit_code = mrvs::parse_command_line(app, argc, argv, args.log_level)) return *exit_code;
   return run(args);
 }
