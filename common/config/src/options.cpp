@@ -254,14 +254,5 @@ std::vector<YamlLine> section_headers(const std::string& section) {
   return lines;
 }
 
-Status write_text_file(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return absl::PermissionDeniedError(fmt::format("cannot open '{}' for writing", path.string()));
-  out << text;
-  out.close();
-  if (!out) return absl::DataLossError(fmt::format("cannot write '{}'", path.string()));
-  return absl::OkStatus();
-}
-
 }  // namespace detail
 }  // namespace mrvs::config

@@ -1,4 +1,5 @@
 #include "mrvs/io/trajectory_io.h"
+#include "mrvs/core/file.h"
 
 #include <cmath>
 #include <fstream>
@@ -123,35 +124,6 @@ Status check_rows_to_write(const std::filesystem::path& path, const std::vector<
   return absl::OkStatus();
 }
 
-/// Writes `content` to `path` through a temporary file renamed into place.
-Status write_text_file(const std::filesystem::path& path, const std::string& content) {
-  std::error_code ec;
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
-  if (ec) {
-    return absl::PermissionDeniedError(fmt::format("cannot create folder {} for {}: {}",
-                                                   path.parent_path().string(), path.string(), ec.message()));
-  }
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(content.data(), static_cast<std::streamsize>(content.size()));
-    out.close();
-    if (!out) {
-      std::filesystem::remove(tmp, ec);
-      return absl::PermissionDeniedError(fmt::format(
-          "cannot write {}: check that the folder is writable and the disk is not full", tmp.string()));
-    }
-  }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return absl::PermissionDeniedError(fmt::format("cannot rename {} to {}: {}; check the permissions",
-                                                   tmp.string(), path.string(), ec.message()));
-  }
-  return absl::OkStatus();
-}
-
 }  // namespace
 
 const char* to_string(TrajectoryFormat format) {
@@ -240,7 +212,7 @@ Status write_tum_trajectory(const std::filesystem::path& path, const Trajectory&
     fmt::format_to(std::back_inserter(out), "{} {} {} {} {} {} {} {}\n", format_seconds(pose.t_ns), p.x(),
                    p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
   }
-  return write_text_file(path, fmt::to_string(out));
+  return write_file_atomically(path, fmt::to_string(out));
 }
 
 Status write_euroc_groundtruth(const std::filesystem::path& path,
@@ -258,7 +230,7 @@ Status write_euroc_groundtruth(const std::filesystem::path& path,
                    s.bias_gyro.x(), s.bias_gyro.y(), s.bias_gyro.z(), s.bias_accel.x(), s.bias_accel.y(),
                    s.bias_accel.z());
   }
-  return write_text_file(path, fmt::to_string(out));
+  return write_file_atomically(path, fmt::to_string(out));
 }
 
 }  // namespace mrvs::io

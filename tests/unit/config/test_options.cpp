@@ -234,9 +234,11 @@ TEST(Options, SaveThenLoadGivesAnEqualStruct) {
 
 TEST(Options, SaveToUnwritablePathIsAnError) {
   test::TempDir dir;
-  const Status s = save_options(dir / "missing_folder" / "x.yaml", ExampleOptions{});
+  // A folder path that runs through a regular file can never be created.
+  dir.write("not_a_folder", "x");
+  const Status s = save_options(dir / "not_a_folder" / "x.yaml", ExampleOptions{});
   ASSERT_FALSE(s.ok());
-  EXPECT_THAT(std::string(s.message()), HasSubstr("missing_folder"));
+  EXPECT_THAT(std::string(s.message()), HasSubstr("not_a_folder"));
 }
 
 TEST(Options, NonFiniteDoublesRoundTrip) {

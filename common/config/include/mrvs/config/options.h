@@ -48,6 +48,7 @@
 #include "mrvs/config/constraints.h"
 #include "mrvs/config/detail/visitors.h"
 #include "mrvs/config/yaml_document.h"
+#include "mrvs/core/file.h"
 #include "mrvs/core/status.h"
 
 namespace mrvs::config {
@@ -57,8 +58,6 @@ namespace detail {
 std::vector<YamlLine> section_headers(const std::string& section);
 /// Number of parts of a dotted section ("" -> 0).
 int section_depth(const std::string& section);
-/// Writes a text file; error naming the path on failure.
-Status write_text_file(const std::filesystem::path& path, const std::string& text);
 }  // namespace detail
 
 /// How options_to_yaml writes.
@@ -141,7 +140,7 @@ template <class T>
 Status save_options(const std::filesystem::path& path, const T& options, const std::string& section = "") {
   WriteStyle style;
   style.mark_defaults = false;
-  return detail::write_text_file(
+  return write_file_atomically(
       path, "# Written by mrvs::config::save_options\n" + options_to_yaml(options, section, style));
 }
 
