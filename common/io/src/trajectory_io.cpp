@@ -1,5 +1,6 @@
 #include "mrvs/io/trajectory_io.h"
 #include "mrvs/core/file.h"
+#include "write_rows.h"
 
 #include <cmath>
 #include <fstream>
@@ -20,10 +21,11 @@ constexpr const char* kTumLayout = "'t tx ty tz qx qy qz qw' (TUM: t in seconds,
 constexpr const char* kEurocGtColumns =
     "#timestamp [ns], p_RS_R_x/y/z [m], q_RS_w/x/y/z [], v_RS_R_x/y/z [m s^-1], b_w_RS_S_x/y/z [rad s^-1], "
     "b_a_RS_S_x/y/z [m s^-2]";
+// The real EuRoC header, blanks after the commas included.
 constexpr const char* kEurocGtHeader =
-    "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z [],"
-    "v_RS_R_x [m s^-1],v_RS_R_y [m s^-1],v_RS_R_z [m s^-1],b_w_RS_S_x [rad s^-1],b_w_RS_S_y [rad s^-1],"
-    "b_w_RS_S_z [rad s^-1],b_a_RS_S_x [m s^-2],b_a_RS_S_y [m s^-2],b_a_RS_S_z [m s^-2]";
+    "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], "
+    "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
+    "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]";
 constexpr std::size_t kTumFields = 8;
 constexpr std::size_t kEurocGtFields = 17;
 
@@ -103,26 +105,6 @@ StatusOr<Trajectory> read_tum_impl(const std::filesystem::path& path, Separator 
 }
 
 bool finite_pose(const SE3d& T) { return T.translation().allFinite() && T.quaternion().coeffs().allFinite(); }
-
-/// Error unless times strictly increase and every value is finite.
-template <typename Row, typename AllFinite>
-Status check_rows_to_write(const std::filesystem::path& path, const std::vector<Row>& rows,
-                           AllFinite all_finite) {
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    if (!all_finite(rows[i])) {
-      return absl::InvalidArgumentError(fmt::format(
-          "cannot write {}: entry {} (t = {} ns) has a non-finite value; fix the data before writing",
-          path.string(), i, rows[i].t_ns));
-    }
-    if (i > 0 && rows[i].t_ns <= rows[i - 1].t_ns) {
-      return absl::InvalidArgumentError(
-          fmt::format("cannot write {}: entry {} has t = {} ns, not after entry {} (t = {} ns); times must "
-                      "strictly increase: sort the data and remove duplicates before writing",
-                      path.string(), i, rows[i].t_ns, i - 1, rows[i - 1].t_ns));
-    }
-  }
-  return absl::OkStatus();
-}
 
 }  // namespace
 

@@ -152,6 +152,14 @@ StatusOr<std::vector<ImuSample>> read_euroc_imu_csv(const std::filesystem::path&
                                                     const ReadPolicy& policy = {},
                                                     Warnings* warnings = nullptr);
 
+/// Writes EuRoC camN/data.csv ("#timestamp [ns],filename", filename = the record path's
+/// file name). Times must strictly increase.
+Status write_euroc_image_csv(const std::filesystem::path& csv, const std::vector<ImageRecord>& records);
+
+/// Writes EuRoC imu0/data.csv with the real header; values in the shortest text that reads
+/// back to the same double. Times must strictly increase, values be finite.
+Status write_euroc_imu_csv(const std::filesystem::path& csv, const std::vector<ImuSample>& samples);
+
 /// Result of pairing two image streams.
 struct StereoMatch {
   std::vector<StereoFrame> frames;
