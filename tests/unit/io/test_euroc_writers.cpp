@@ -19,7 +19,7 @@ std::vector<ImuSample> imu_samples(int n) {
   std::vector<ImuSample> out;
   for (int k = 0; k < n; ++k) {
     // Values with long expansions to check exact text round trips.
-    out.push_back({kT0 + k * 5'000'000, Vec3d(0.1 / 3 * k, -1e-7 * k, 2.0 / 7),
+    out.push_back({kT0 + TimestampNs{k} * 5'000'000, Vec3d(0.1 / 3 * k, -1e-7 * k, 2.0 / 7),
                    Vec3d(9.80665 + 1e-9 * k, -0.3 * k, 1.0 / 9)});
   }
   return out;
@@ -45,7 +45,7 @@ TEST(EurocWriters, ImageCsvRoundTripsWithFileNames) {
   const test::TempDir dir;
   std::vector<ImageRecord> records;
   for (int k = 0; k < 20; ++k) {
-    const TimestampNs t = kT0 + k * 50'000'000;
+    const TimestampNs t = kT0 + TimestampNs{k} * 50'000'000;
     records.push_back({t, dir / "cam0/data" / (std::to_string(t) + ".png")});
     dir.write("cam0/data/" + std::to_string(t) + ".png", "");
   }
