@@ -39,9 +39,10 @@ function(mrvs_add_executable name)
   set_property(GLOBAL APPEND PROPERTY MRVS_EXECUTABLES ${name})
 endfunction()
 
-# mrvs_add_gtest(<name> SOURCES ... DEPS ...): one gtest binary registered in CTest.
+# mrvs_add_gtest(<name> SOURCES ... DEPS ... [LABELS label] [PROPERTIES key value ...]):
+# one gtest binary whose tests are registered in CTest (PROPERTIES go to every test).
 function(mrvs_add_gtest name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS;PROPERTIES" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
   mrvs_target_warnings(${name})
@@ -50,5 +51,5 @@ function(mrvs_add_gtest name)
   # label "unit_<labels>": `ctest -L` takes a regex, so both -L unit and -L <label> select it.
   string(JOIN "_" label unit ${ARG_LABELS})
   gtest_discover_tests(${name} WORKING_DIRECTORY ${CMAKE_SOURCE_DIR}
-                       PROPERTIES LABELS ${label} DISCOVERY_TIMEOUT 60)
+                       PROPERTIES LABELS ${label} ${ARG_PROPERTIES} DISCOVERY_TIMEOUT 60)
 endfunction()

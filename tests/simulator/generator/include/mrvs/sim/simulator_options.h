@@ -1,0 +1,83 @@
+#pragma once
+// Everything dataset_simulator can be told, declared once (config Options structs): a
+// profile (indoor EuRoC-like / outdoor KAIST-like) sets the rig and the defaults, a preset
+// (easy / realistic) sets the realism knobs, then a YAML file and `--set key=value`
+// overrides change single keys. The resolved options are printed and saved in sim0/.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "mrvs/config/options.h"
+#include "mrvs/core/status.h"
+#include "mrvs/sim/car_route.h"
+#include "mrvs/sim/imu_sim.h"
+#include "mrvs/sim/map_options.h"
+#include "mrvs/sim/render_options.h"
+#include "mrvs/sim/scene.h"
+#include "mrvs/sim/spline_trajectory.h"
+
+namespace mrvs::sim {
+
+/// SceneOptions with a visit() (scene.h stays free of the config library).
+struct SceneKnobs : config::OptionsEquality<SceneKnobs> {
+  SceneOptions value;
+
+  template <class V>
+  void visit(V& v) {
+    using namespace mrvs::config::constraints;
+    v("num_boxes", value.num_boxes, in_range(0, 200), "clutter boxes (indoor)");
+    v("texel_size_m", value.texel_size_m, in_range(0.001, 0.1), "albedo bake resolution, m");
+    v("clearance_m", value.clearance_m, in_range(0.0, 10.0), "min distance of boxes from the trajectory, m");
+    v("room_margin_m", value.room_margin_m, in_range(0.0, 50.0), "room grows to the trajectory + margin, m");
+    v("textureless_fraction", value.textureless_fraction, in_range(0.0, 1.0),
+      "share of constant-albedo faces");
+    v("unmapped_objects", value.unmapped_objects, in_range(0, 200), "boxes in the images but not in the map");
+    v("removed_objects", value.removed_objects, in_range(0, 200), "boxes in the map but not in the images");
+    v("rotated_fraction", value.rotated_fraction, in_range(0.0, 1.0), "share of boxes rotated about z");
+  }
+};
+
+struct SimulatorOptions : config::OptionsEquality<SimulatorOptions> {
+  std::int64_t seed = 1;         ///< one seed for every random stream
+  double time_offset_ms = 0.0;   ///< camera-IMU offset t_d: t_imu = t_cam + t_d, ms
+  bool write_clean_map = false;  ///< also write sim0/pointcloud_clean.ply (no noise, no misalignment)
+  TrajectoryOptions trajectory;  ///< window, static prefix, knot spacing
+  CarRouteOptions route;         ///< outdoor only: the route the car drives
+  ImuSimOptions imu;             ///< IMU noise and biases
+  SceneKnobs scene;              ///< clutter and texture knobs
+  RenderOptions render;          ///< anti-aliasing and photometric knobs
+  MapOptions map;                ///< prior-map density, noise, holes, misalignment
+
+  template <class V>
+  void visit(V& v) {
+    using namespace mrvs::config::constraints;
+    v("seed", seed, at_least(std::int64_t{0}), "seed of every random stream");
+    v("time_offset_ms", time_offset_ms, in_range(-1000.0, 1000.0),
+      "camera-IMU offset t_d (t_imu = t_cam + t_d), ms");
+    v("write_clean_map", write_clean_map, any(), "also write sim0/pointcloud_clean.ply");
+    v.section("trajectory", trajectory, "time window and start handling");
+    v.section("route", route, "outdoor car route");
+    v.section("imu", imu, "IMU noise model");
+    v.section("scene", scene, "scene layout and textures");
+    v.section("render", render, "image formation");
+    v.section("map", map, "survey LiDAR prior map");
+  }
+};
+
+/// "indoor" / "outdoor".
+StatusOr<SceneProfile> parse_profile(const std::string& name);
+std::string profile_name(SceneProfile profile);
+
+/// Defaults of a profile: indoor = EuRoC rig noise and the Vicon-room survey; outdoor =
+/// KAIST-like IMU, gravity 9.80766, the street survey and the test car route.
+SimulatorOptions default_options(SceneProfile profile);
+
+/// Names accepted by apply_preset.
+std::vector<std::string> preset_names();
+/// "easy": every realism knob off (no pixel noise, fixed exposure, exact map, no holes or
+/// map changes). "realistic": pixel noise (2 DN read + shot), exposure walk, 3 % stereo gain
+/// mismatch, vignetting, 20 % textureless faces, 2 unmapped objects, 5 % map holes, map
+/// noise 3 mm / 1 mm. Error naming the accepted presets for another name.
+Status apply_preset(const std::string& preset, SimulatorOptions& options);
+
+}  // namespace mrvs::sim

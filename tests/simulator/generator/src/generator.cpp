@@ -1,0 +1,274 @@
+#include "mrvs/sim/generator.h"
+
+#include <chrono>
+#include <cmath>
+#include <future>
+#include <optional>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "mrvs/core/file.h"
+#include "mrvs/io/dataset.h"
+#include "mrvs/io/trajectory_io.h"
+#include "mrvs/sim/map_io.h"
+#include "mrvs/sim/photometry.h"
+#include "mrvs/sim/png_writer.h"
+#include "mrvs/sim/prior_map.h"
+#include "mrvs/sim/rig.h"
+#include "mrvs/sim/staging_dir.h"
+#include "mrvs/sim/stereo_renderer.h"
+#include "mrvs/sim/time_grid.h"
+
+namespace mrvs::sim {
+namespace fs = std::filesystem;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// The same error with `what` in front of its message.
+Status with_context(const Status& status, const std::string& what) {
+  return Status(status.code(), fmt::format("{}: {}", what, std::string(status.message())));
+}
+
+StatusOr<io::Trajectory> load_motion_input(const GeneratorRequest& r, World& world) {
+  if (r.profile == SceneProfile::kOutdoor) {
+    if (!r.trajectory.empty()) {
+      return absl::InvalidArgumentError(
+          "the outdoor profile drives its own car route (options route.*); omit --trajectory");
+    }
+    MRVS_ASSIGN_OR_RETURN(world.route, synthesize_car_route(r.options.route, r.options.seed));
+    world.source = fmt::format("synthetic car route ({:.1f} m)", world.route->length_m);
+    return world.route->trajectory;
+  }
+  if (r.trajectory.empty()) {
+    return absl::InvalidArgumentError(
+        "the indoor profile follows a trajectory file: give --trajectory (TUM txt or EuRoC ground-truth csv, "
+        "e.g. ../shared/data/euroc_groundtruth/V1_01_easy.txt)");
+  }
+  io::Warnings warnings;
+  auto input = io::read_trajectory(r.trajectory, {}, &warnings);
+  if (!input.ok()) return with_context(input.status(), fmt::format("trajectory {}", r.trajectory.string()));
+  for (const std::string& w : warnings) spdlog::warn("{}", w);
+  world.source = r.trajectory.string();
+  return input;
+}
+
+Status plan_motion(const GeneratorRequest& r, World& world) {
+  MRVS_ASSIGN_OR_RETURN(io::Trajectory input, load_motion_input(r, world));
+  auto spline = SplineTrajectory::fit(input, r.options.trajectory);
+  if (!spline.ok()) return with_context(spline.status(), fmt::format("trajectory {}", world.source));
+  world.spline = std::move(*spline);
+  TimeGridOptions grid;
+  grid.imu_rate_hz = static_cast<int>(std::lround(world.rig.imu.rate_hz));
+  grid.camera_rate_hz = static_cast<int>(std::lround(world.rig.cameras[0].rate_hz));
+  grid.camera_time_offset_ns = std::llround(r.options.time_offset_ms * 1e6);
+  MRVS_ASSIGN_OR_RETURN(world.grid,
+                        make_time_grid(world.spline->t_begin_ns(), world.spline->t_end_ns(), grid));
+  if (world.grid.camera_true_ns.size() < 2) {
+    return absl::InvalidArgumentError(fmt::format(
+        "trajectory {}: the time window holds {} camera frame(s); give a longer window (trajectory.window_*)",
+        world.source, world.grid.camera_true_ns.size()));
+  }
+  MRVS_ASSIGN_OR_RETURN(world.imu, simulate_imu(*world.spline, world.grid.imu_ns, r.options.imu,
+                                                static_cast<std::uint64_t>(r.options.seed)));
+  return absl::OkStatus();
+}
+
+Status plan_states(World& world) {
+  const std::size_t n = world.grid.imu_ns.size();
+  world.states.resize(n);
+  Quatd previous = Quatd::Identity();
+  for (std::size_t k = 0; k < n; ++k) {
+    MRVS_ASSIGN_OR_RETURN(const Kinematics kin, world.spline->evaluate(world.grid.imu_ns[k]));
+    Quatd q = kin.T_w_b.quaternion();
+    if (k > 0 && q.coeffs().dot(previous.coeffs()) < 0) q.coeffs() = -q.coeffs();  // continuous sign
+    previous = q;
+    io::GroundTruthState& s = world.states[k];
+    s.t_ns = world.grid.imu_ns[k];
+    s.T_w_b = SE3d(q, kin.T_w_b.translation());
+    s.v_w_b = kin.v_w;
+    s.bias_gyro = world.imu[k].bias_gyro;
+    s.bias_accel = world.imu[k].bias_accel;
+  }
+  // The scene and the survey cover the whole trajectory, not only the window: every window
+  // of one source trajectory shares one room and one prior map, as with a real survey.
+  constexpr DurationNs kStepNs = 50'000'000;
+  for (TimestampNs t = world.spline->support_begin_ns(); t <= world.spline->support_end_ns(); t += kStepNs) {
+    MRVS_ASSIGN_OR_RETURN(const Kinematics kin, world.spline->evaluate(t));
+    world.body_positions.push_back(kin.T_w_b.translation());
+    world.keep_clear.push_back(kin.T_w_b.translation());
+    for (const auto& cam : world.calibration.cameras) {
+      world.keep_clear.push_back((kin.T_w_b * cam.T_b_c).translation());
+    }
+  }
+  return absl::OkStatus();
+}
+
+/// Indoor: a room around the trajectory. Outdoor: streets along the route's straights.
+StatusOr<Scene> build_scene(const GeneratorRequest& r, const World& world, std::uint64_t seed) {
+  if (!world.route) return make_scene(r.profile, r.options.scene.value, world.keep_clear, seed);
+  std::vector<StreetLeg> legs;
+  for (const RouteStraight& straight : world.route->straights)
+    legs.push_back({straight.start_xy, straight.end_xy});
+  return make_street_scene(r.options.scene.value, legs, world.keep_clear, seed);
+}
+
+std::string map_comment(const GeneratorRequest& r) {
+  return fmt::format("synthetic survey scan; generator {}; scene {}; seed {}; frame world(R)",
+                     generator_version(), profile_name(r.profile), r.options.seed);
+}
+
+/// Renders every frame; PNG encoding of frame k overlaps the rendering of frame k + 1.
+Status render_frames(const StereoRenderer& renderer, const World& world, const fs::path& mav0,
+                     std::uint64_t seed, const ProgressCallback& progress,
+                     std::array<std::vector<io::ImageRecord>, 2>& records) {
+  const std::int64_t n = static_cast<std::int64_t>(world.grid.camera_true_ns.size());
+  const std::vector<double> gains = exposure_gains(seed, n, renderer.options());
+  std::future<Status> pending;
+  for (std::int64_t k = 0; k < n; ++k) {
+    const SE3d& T_w_b = world.frame_pose(static_cast<std::size_t>(k));
+    auto images = renderer.render_stereo(T_w_b, FrameInfo{k, gains[k]});
+    if (!images.ok()) return with_context(images.status(), fmt::format("rendering frame {}", k));
+    if (pending.valid()) MRVS_RETURN_IF_ERROR(pending.get());
+    const TimestampNs stamp = world.grid.camera_stamp_ns[k];
+    std::array<fs::path, 2> paths;
+    for (int c = 0; c < 2; ++c) {
+      paths[c] = mav0 / fmt::format("cam{}/data/{}.png", c, stamp);
+      records[c].push_back({stamp, paths[c]});
+    }
+    pending = std::async(std::launch::async, [imgs = std::move(*images), paths]() -> Status {
+      for (int c = 0; c < 2; ++c) MRVS_RETURN_IF_ERROR(write_png(paths[c], imgs[c]));
+      return absl::OkStatus();
+    });
+    if (progress) progress({"render", k + 1, n});
+  }
+  return pending.valid() ? pending.get() : absl::OkStatus();
+}
+
+Status write_sensor_files(const World& world, const SimulatorOptions& o, const fs::path& mav0,
+                          const std::array<std::vector<io::ImageRecord>, 2>& records) {
+  for (int c = 0; c < 2; ++c) {
+    const fs::path dir = mav0 / fmt::format("cam{}", c);
+    MRVS_RETURN_IF_ERROR(
+        write_file_atomically(dir / "sensor.yaml", camera_sensor_yaml(world.rig.cameras[c])));
+    MRVS_RETURN_IF_ERROR(io::write_euroc_image_csv(dir / "data.csv", records[c]));
+  }
+  RigImu imu = world.rig.imu;  // the densities actually simulated
+  const ImuNoiseDensities d = effective_noise_densities(o.imu);
+  imu.gyroscope_noise_density = d.gyroscope_noise_density;
+  imu.gyroscope_random_walk = d.gyroscope_random_walk;
+  imu.accelerometer_noise_density = d.accelerometer_noise_density;
+  imu.accelerometer_random_walk = d.accelerometer_random_walk;
+  MRVS_RETURN_IF_ERROR(write_file_atomically(mav0 / "imu0/sensor.yaml", imu_sensor_yaml(imu)));
+  std::vector<io::ImuSample> measured;
+  measured.reserve(world.imu.size());
+  for (const ImuSimSample& s : world.imu) measured.push_back(s.measured);
+  MRVS_RETURN_IF_ERROR(io::write_euroc_imu_csv(mav0 / "imu0/data.csv", measured));
+  const fs::path gt = mav0 / "state_groundtruth_estimate0";
+  MRVS_RETURN_IF_ERROR(write_file_atomically(
+      gt / "sensor.yaml", groundtruth_sensor_yaml(fmt::format(
+                              "Synthetic ground truth (cubic B-spline, knot {} ns, generator {}, seed {}).",
+                              world.spline->knot_spacing_ns(), generator_version(), o.seed))));
+  return io::write_euroc_groundtruth(gt / "data.csv", world.states);
+}
+
+std::string config_yaml(const GeneratorRequest& r, const World& world) {
+  config::WriteStyle style;
+  style.mark_defaults = false;
+  return fmt::format(
+      "# dataset_simulator configuration of this sequence (load it back with --config).\n"
+      "# generator: {}\n# profile: {}\n# preset: {}\n# source: {}\n# rig: {}\n"
+      "# t0_ns: {}\n# t_end_ns: {}\n# frames: {}\n# imu_samples: {}\n# knot_spacing_ns: {}\n"
+      "# gravity_w: [0, 0, -{}]\n{}",
+      generator_version(), profile_name(r.profile), r.preset, world.source, world.rig.name,
+      world.grid.imu_ns.front(), world.grid.imu_ns.back(), world.grid.camera_true_ns.size(),
+      world.grid.imu_ns.size(), world.spline->knot_spacing_ns(), r.options.imu.gravity_magnitude,
+      config::options_to_yaml(r.options, "", style));
+}
+
+Status write_truth_files(const GeneratorRequest& r, const World& world, const fs::path& sim0) {
+  const PriorMap& map = world.map;
+  MRVS_RETURN_IF_ERROR(write_file_atomically(sim0 / "config.yaml", config_yaml(r, world)));
+  MRVS_RETURN_IF_ERROR(write_file_atomically(sim0 / "scene.yaml", world.scene->to_yaml()));
+  std::vector<io::ImuSample> noiseless;
+  noiseless.reserve(world.imu.size());
+  for (const ImuSimSample& s : world.imu) noiseless.push_back(s.noiseless);
+  MRVS_RETURN_IF_ERROR(io::write_euroc_imu_csv(sim0 / "imu_noiseless.csv", noiseless));
+  MRVS_RETURN_IF_ERROR(write_transform_yaml(sim0 / "T_map_world.yaml", map.T_map_world));
+  if (!r.options.write_clean_map) return absl::OkStatus();
+  return write_ply(sim0 / "pointcloud_clean.ply", map.clean_points, map_comment(r) + "; clean (no noise)");
+}
+
+Status make_folders(const fs::path& root) {
+  for (const char* sub : {"mav0/cam0/data", "mav0/cam1/data", "mav0/imu0", "mav0/state_groundtruth_estimate0",
+                          "mav0/pointcloud0", "sim0"}) {
+    std::error_code ec;
+    fs::create_directories(root / sub, ec);
+    if (ec)
+      return absl::PermissionDeniedError(
+          fmt::format("cannot create {}: {}", (root / sub).string(), ec.message()));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+std::string generator_version() { return fmt::format("mrvs dataset_simulator {}", MRVS_VERSION); }
+
+StatusOr<World> build_world(const GeneratorRequest& r, const ProgressCallback& progress) {
+  World world;
+  world.rig = r.profile == SceneProfile::kIndoor ? euroc_rig() : kaist_like_rig();
+  MRVS_ASSIGN_OR_RETURN(world.calibration, world.rig.calibration());
+  MRVS_RETURN_IF_ERROR(plan_motion(r, world));
+  MRVS_RETURN_IF_ERROR(plan_states(world));
+  const std::uint64_t seed = static_cast<std::uint64_t>(r.options.seed);
+  if (progress) progress({"scene", 0, 1});
+  MRVS_ASSIGN_OR_RETURN(world.scene, build_scene(r, world, seed));
+  if (progress) progress({"map", 0, 1});
+  MRVS_ASSIGN_OR_RETURN(world.map, sample_prior_map(*world.scene, world.body_positions, r.options.map, seed));
+  return world;
+}
+
+StatusOr<GeneratorReport> generate_dataset(const GeneratorRequest& r, const ProgressCallback& progress) {
+  const Clock::time_point start = Clock::now();
+  // Check the destination first: a bad --out fails before any work.
+  MRVS_ASSIGN_OR_RETURN(StagingDir staging, StagingDir::create(r.out, r.overwrite));
+  GeneratorReport report;
+  MRVS_ASSIGN_OR_RETURN(const World world, build_world(r, progress));
+  report.seconds_map = seconds_since(start);
+  MRVS_RETURN_IF_ERROR(make_folders(staging.path()));
+  const fs::path mav0 = staging.path() / "mav0";
+  const PriorMap& map = world.map;
+  MRVS_RETURN_IF_ERROR(
+      write_ply(mav0 / "pointcloud0/data.ply", map.points, map_comment(r), ply_format(r.options.map)));
+  MRVS_RETURN_IF_ERROR(
+      write_file_atomically(mav0 / "pointcloud0/sensor.yaml", pointcloud_sensor_yaml(map_comment(r))));
+
+  const Clock::time_point stage = Clock::now();
+  const std::uint64_t seed = static_cast<std::uint64_t>(r.options.seed);
+  MRVS_ASSIGN_OR_RETURN(StereoRenderer renderer,
+                        StereoRenderer::create(*world.scene, world.calibration, r.options.render, seed));
+  std::array<std::vector<io::ImageRecord>, 2> records;
+  MRVS_RETURN_IF_ERROR(render_frames(renderer, world, mav0, seed, progress, records));
+  report.seconds_render = seconds_since(stage);
+
+  MRVS_RETURN_IF_ERROR(write_sensor_files(world, r.options, mav0, records));
+  MRVS_RETURN_IF_ERROR(write_truth_files(r, world, staging.path() / "sim0"));
+  MRVS_RETURN_IF_ERROR(staging.commit());
+
+  report.out = staging.destination();
+  report.frames = static_cast<std::int64_t>(world.grid.camera_true_ns.size());
+  report.imu_samples = static_cast<std::int64_t>(world.grid.imu_ns.size());
+  report.map_points = static_cast<std::int64_t>(map.points.size());
+  report.t_begin_ns = world.grid.imu_ns.front();
+  report.t_end_ns = world.grid.imu_ns.back();
+  report.seconds_total = seconds_since(start);
+  return report;
+}
+
+}  // namespace mrvs::sim

@@ -1,0 +1,83 @@
+#include "mrvs/sim/photometry.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mrvs::sim {
+
+std::vector<double> exposure_gains(std::uint64_t seed, std::int64_t num_frames, double sigma, double limit) {
+  std::vector<double> gains;
+  if (num_frames <= 0) return gains;
+  gains.reserve(static_cast<std::size_t>(num_frames));
+  const CounterRng rng(seed, Stream::kExposure);
+  const double lo = std::log(1.0 - limit);
+  const double hi = std::log(1.0 + limit);
+  double log_gain = 0.0;
+  for (std::int64_t k = 0; k < num_frames; ++k) {
+    if (k > 0) log_gain = std::clamp(log_gain + sigma * rng.normal(static_cast<std::uint64_t>(k)), lo, hi);
+    gains.push_back(std::exp(log_gain));
+  }
+  return gains;
+}
+
+std::vector<double> exposure_gains(std::uint64_t seed, std::int64_t num_frames,
+                                   const RenderOptions& options) {
+  if (!options.exposure_walk)
+    return std::vector<double>(static_cast<std::size_t>(std::max<std::int64_t>(num_frames, 0)), 1.0);
+  return exposure_gains(seed, num_frames, options.exposure_sigma, options.exposure_limit);
+}
+
+double camera_gain(int cam, const RenderOptions& options) {
+  return cam == 1 ? 1.0 + options.stereo_gain_mismatch : 1.0;
+}
+
+PixelPhotometry::PixelPhotometry(const RenderOptions& options, const camera::CameraModel& camera, int cam,
+                                 std::int64_t frame, double frame_gain, std::uint64_t noise_seed)
+    : gain_(frame_gain * camera_gain(cam, options)),
+      vignetting_(options.vignetting),
+      inv_r2_max_(0.0),
+      cx_(camera.cx()),
+      cy_(camera.cy()),
+      read_var_(options.read_noise_sigma * options.read_noise_sigma),
+      inv_shot_k_(options.shot_noise ? 1.0 / options.shot_noise_k : 0.0),
+      has_noise_(options.read_noise_sigma > 0.0 || options.shot_noise),
+      rng_(noise_seed, Stream::kImageNoise),
+      cam_(static_cast<std::uint64_t>(cam)),
+      frame_(static_cast<std::uint64_t>(frame)),
+      width_(static_cast<std::uint64_t>(camera.width())) {
+  // r_max: the farthest pixel-centre corner from the principal point.
+  double r2_max = 0.0;
+  for (const double u : {0.0, camera.width() - 1.0}) {
+    for (const double v : {0.0, camera.height() - 1.0}) {
+      r2_max = std::max(r2_max, (u - cx_) * (u - cx_) + (v - cy_) * (v - cy_));
+    }
+  }
+  inv_r2_max_ = r2_max > 0.0 ? 1.0 / r2_max : 0.0;
+}
+
+double PixelPhotometry::clean_value(double radiance, int u, int v) const {
+  double a = radiance;
+  if (vignetting_ != 0.0) {
+    const double du = u - cx_, dv = v - cy_;
+    a += vignetting_ * (du * du + dv * dv) * inv_r2_max_;
+  }
+  return gain_ * a * 255.0;
+}
+
+double PixelPhotometry::noise_sigma(double clean) const {
+  return std::sqrt(read_var_ + std::max(clean, 0.0) * inv_shot_k_);
+}
+
+double PixelPhotometry::noise(double clean, int u, int v) const {
+  if (!has_noise_) return 0.0;
+  const std::uint64_t pixel = static_cast<std::uint64_t>(v) * width_ + static_cast<std::uint64_t>(u);
+  return noise_sigma(clean) * rng_.normal(cam_, frame_, pixel);
+}
+
+std::uint8_t PixelPhotometry::dn(double radiance, int u, int v) const {
+  const double clean = clean_value(radiance, u, v);
+  const double value = std::round(clean + noise(clean, u, v));
+  return static_cast<std::uint8_t>(std::clamp(value, 0.0, 255.0));
+}
+
+}  // namespace mrvs::sim

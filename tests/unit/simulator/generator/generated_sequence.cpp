@@ -1,0 +1,55 @@
+#include "generated_sequence.h"
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "mrvs/config/options.h"
+#include "mrvs/test/shared_data.h"
+
+namespace mrvs::sim::test {
+
+GeneratorRequest indoor_request(const std::filesystem::path& out, double duration_s, double start_s) {
+  GeneratorRequest r;
+  r.profile = SceneProfile::kIndoor;
+  r.trajectory = mrvs::test::euroc_groundtruth_file("V1_01_easy.txt");
+  r.out = out;
+  r.preset = "easy";
+  r.options = default_options(SceneProfile::kIndoor);
+  EXPECT_TRUE(apply_preset("easy", r.options).ok());
+  auto doc = config::load_yaml_file(MRVS_INDOOR_FIXTURE_YAML);
+  EXPECT_TRUE(doc.ok()) << doc.status();
+  if (doc.ok()) {
+    EXPECT_TRUE(config::update_options(*doc, "", r.options).ok());
+  }
+  if (start_s >= 0) r.options.trajectory.window_start_s = start_s;
+  if (duration_s >= 0) r.options.trajectory.window_duration_s = duration_s;
+  return r;
+}
+
+std::filesystem::path shared_indoor_sequence() {
+  const char* dir = std::getenv("MRVS_GENERATED_INDOOR");
+  return dir != nullptr ? std::filesystem::path(dir) : std::filesystem::path();
+}
+
+std::map<std::string, std::string> read_tree(const std::filesystem::path& root) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
+    if (!entry.is_regular_file()) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::stringstream bytes;
+    bytes << in.rdbuf();
+    files[std::filesystem::relative(entry.path(), root).string()] = bytes.str();
+  }
+  return files;
+}
+
+std::vector<std::string> list_dir(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) names.push_back(entry.path().filename());
+  return names;
+}
+
+}  // namespace mrvs::sim::test

@@ -1,0 +1,352 @@
+// End-to-end checks of the generator on short sequences: the files pass the project's EuRoC
+// reader, the IMU and ground truth files agree, map points and images agree geometrically
+// and photometrically, output is deterministic, bad input leaves nothing behind.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <optional>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "generated_sequence.h"
+#include "mrvs/io/dataset.h"
+#include "mrvs/io/trajectory_io.h"
+#include "mrvs/sim/map_io.h"
+#include "mrvs/sim/test/strapdown.h"
+#include "mrvs/test/temp_dir.h"
+
+namespace mrvs::sim {
+namespace {
+
+using ::testing::HasSubstr;
+
+class GeneratedIndoor : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new mrvs::test::TempDir();
+    request_ = new GeneratorRequest(test::indoor_request(dir_->path() / "seq"));
+    // Under CTest the fixture step generated it with dataset_simulator; a copy is enough.
+    const std::filesystem::path shared = test::shared_indoor_sequence();
+    if (!shared.empty()) {
+      std::filesystem::copy(shared, request_->out, std::filesystem::copy_options::recursive);
+    } else {
+      auto report = generate_dataset(*request_);
+      ASSERT_TRUE(report.ok()) << report.status();
+    }
+    auto world = build_world(*request_);
+    ASSERT_TRUE(world.ok()) << world.status();
+    world_ = new World(std::move(*world));
+    io::DatasetOptions options;
+    options.path = dir_->path() / "seq";
+    auto dataset = io::open_dataset("euroc", options);
+    ASSERT_TRUE(dataset.ok()) << dataset.status();
+    dataset_ = dataset->release();
+  }
+  static void TearDownTestSuite() {
+    delete dataset_;
+    delete world_;
+    delete request_;
+    delete dir_;
+  }
+  static mrvs::test::TempDir* dir_;
+  static GeneratorRequest* request_;
+  static World* world_;
+  static io::DatasetReader* dataset_;
+};
+mrvs::test::TempDir* GeneratedIndoor::dir_ = nullptr;
+GeneratorRequest* GeneratedIndoor::request_ = nullptr;
+World* GeneratedIndoor::world_ = nullptr;
+io::DatasetReader* GeneratedIndoor::dataset_ = nullptr;
+
+TEST_F(GeneratedIndoor, TheProjectsEurocReaderTakesItUnchanged) {
+  ASSERT_NE(dataset_, nullptr);
+  EXPECT_TRUE(dataset_->warnings().empty()) << dataset_->warnings().front();
+  EXPECT_EQ(dataset_->stereo_frames().size(), world_->grid.camera_true_ns.size());
+  EXPECT_EQ(dataset_->imu().size(), world_->grid.imu_ns.size());
+  EXPECT_EQ(dataset_->groundtruth().size(), dataset_->imu().size());
+  EXPECT_EQ(dataset_->stereo_frames().size(), 20u);  // 1 s at 20 Hz
+  for (int cam = 0; cam < 2; ++cam) {
+    auto image = dataset_->load_image(cam, dataset_->images()[cam].front());
+    ASSERT_TRUE(image.ok()) << image.status();
+    EXPECT_EQ(image->cols, 752);
+    EXPECT_EQ(image->rows, 480);
+    EXPECT_EQ(image->type(), CV_8UC1);
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir_->path() / "seq/mav0/pointcloud0/data.ply"));
+  for (const char* f : {"config.yaml", "scene.yaml", "imu_noiseless.csv", "T_map_world.yaml"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir_->path() / "seq/sim0" / f)) << f;
+  }
+}
+
+TEST_F(GeneratedIndoor, StampsAreExactAndCamerasTickOnImuStamps) {
+  const auto& imu = dataset_->imu();
+  for (std::size_t k = 1; k < imu.size(); ++k) ASSERT_EQ(imu[k].t_ns - imu[k - 1].t_ns, 5'000'000) << k;
+  const auto& frames = dataset_->stereo_frames();
+  for (std::size_t k = 1; k < frames.size(); ++k) {
+    ASSERT_EQ(frames[k].t_ns - frames[k - 1].t_ns, 50'000'000) << k;
+  }
+  for (const io::StereoFrame& f : frames) {
+    ASSERT_TRUE(std::binary_search(imu.begin(), imu.end(), f.t_ns, [](const auto& a, const auto& b) {
+      auto t = [](const auto& x) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, TimestampNs>) {
+          return x;
+        } else {
+          return x.t_ns;
+        }
+      };
+      return t(a) < t(b);
+    })) << f.t_ns;
+  }
+  EXPECT_LT(imu.front().t_ns, frames.front().t_ns);  // an IMU row precedes the first image
+}
+
+TEST_F(GeneratedIndoor, NoiselessImuFileReproducesTheGroundTruthFile) {
+  auto noiseless = io::read_euroc_imu_csv(dir_->path() / "seq/sim0/imu_noiseless.csv");
+  ASSERT_TRUE(noiseless.ok()) << noiseless.status();
+  const auto& gt = dataset_->groundtruth();
+  ASSERT_EQ(noiseless->size(), gt.size());
+  std::vector<Vec3d> gyro, accel;
+  for (const io::ImuSample& s : *noiseless) {
+    gyro.push_back(s.gyro_radps);
+    accel.push_back(s.accel_mps2);
+  }
+  test::NavState state{gt.front().T_w_b.quaternion(), gt.front().T_w_b.translation(), gt.front().v_w_b};
+  const std::size_t last = gt.size() - 1;  // the whole 1 s sequence
+  state =
+      test::integrate_midpoint(state, gyro, accel, 0, last, 0.005, request_->options.imu.gravity_magnitude);
+  EXPECT_LT((state.p_w - gt[last].T_w_b.translation()).norm(), 1e-3);
+  EXPECT_LT(quat::angular_distance(state.q_w_b, gt[last].T_w_b.quaternion()) * test::kRadToDeg, 0.01);
+  EXPECT_LT((state.v_w - gt[last].v_w_b).norm(), 1e-3);
+}
+
+TEST_F(GeneratedIndoor, MeasuredImuIsNoiselessPlusTrueBiasPlusNoise) {
+  auto noiseless = io::read_euroc_imu_csv(dir_->path() / "seq/sim0/imu_noiseless.csv");
+  ASSERT_TRUE(noiseless.ok());
+  const auto& measured = dataset_->imu();
+  const auto& gt = dataset_->groundtruth();
+  double sum2 = 0.0;
+  for (std::size_t k = 0; k < measured.size(); ++k) {
+    const Vec3d n = measured[k].gyro_radps - (*noiseless)[k].gyro_radps - gt[k].bias_gyro;
+    sum2 += n.squaredNorm();
+  }
+  const double sigma = std::sqrt(sum2 / (3.0 * measured.size()));
+  EXPECT_NEAR(sigma, 1.6968e-4 / std::sqrt(0.005), 0.1 * 1.6968e-4 / std::sqrt(0.005));  // 200 samples
+}
+
+TEST_F(GeneratedIndoor, CalibrationFilesAreTheRenderedRig) {
+  const Rig rig = euroc_rig();
+  for (int cam = 0; cam < 2; ++cam) {
+    const auto& c = dataset_->calibration().cameras[cam];
+    EXPECT_EQ(c.model->params(), rig.cameras[cam].params);
+    EXPECT_LT((c.T_b_c.matrix() - rig.cameras[cam].T_BS).cwiseAbs().maxCoeff(), 1e-12);
+  }
+  EXPECT_NEAR(dataset_->calibration().T_c0_c1().translation().norm(), 0.11008, 5e-5);
+}
+
+// The map points seen in an image: project each into the image, cast that pixel's ray in the
+// scene, and compare: the ray hits the map point, the hit reprojects to the pixel, and the
+// image there has the map point's intensity.
+TEST_F(GeneratedIndoor, MapPointsSeenInImagesReprojectExactlyAndMatchIntensity) {
+  auto map = read_ply_xyzi(dir_->path() / "seq/mav0/pointcloud0/data.ply");
+  ASSERT_TRUE(map.ok()) << map.status();
+  ASSERT_EQ(map->size(), world_->map.points.size());
+  const auto& calib = dataset_->calibration().cameras[0];
+  const std::size_t frame = 10;
+  auto image = dataset_->load_image(0, dataset_->images()[0][frame]);
+  ASSERT_TRUE(image.ok());
+  const io::GroundTruthState* gt = nullptr;
+  for (const auto& s : dataset_->groundtruth()) {
+    if (s.t_ns == dataset_->images()[0][frame].t_ns) gt = &s;
+  }
+  ASSERT_NE(gt, nullptr);
+  const SE3d T_w_c = gt->T_w_b * calib.T_b_c;
+  const SE3d T_c_w = T_w_c.inverse();
+  std::vector<double> dn_image, dn_map;
+  double worst_px = 0.0, worst_m = 0.0;
+  for (std::size_t i = 0; i < map->size(); i += 7) {
+    const Vec3d X = (*map)[i].position.cast<double>();
+    auto uv = calib.model->project(T_c_w * X);
+    if (!uv || !calib.model->in_image(*uv, 2.0)) continue;
+    auto bearing = calib.model->unproject(*uv);
+    ASSERT_TRUE(bearing.ok());
+    const Vec3d d_w = T_w_c.quaternion() * *bearing;
+    auto hit = world_->scene->intersect(T_w_c.translation().cast<float>(), d_w.cast<float>(), 100.0f);
+    // Seen: the pixel's ray stops on the face the point was sampled on (the world holds the
+    // face ids in PLY order). Otherwise it is occluded or beyond a face edge.
+    if (!hit || hit->face != world_->map.points[i].face) continue;
+    const Vec3d H = T_w_c.translation() + static_cast<double>(hit->distance) * d_w;
+    worst_m = std::max(worst_m, (H - X).norm());
+    worst_px = std::max(worst_px, (*calib.model->project(T_c_w * H) - *uv).norm());
+    cv::Mat patch;
+    cv::getRectSubPix(*image, cv::Size(1, 1), cv::Point2f(float((*uv).x()), float((*uv).y())), patch, CV_32F);
+    dn_image.push_back(patch.at<float>(0, 0));
+    dn_map.push_back(255.0 * (*map)[i].intensity);
+  }
+  ASSERT_GT(dn_image.size(), 1000u);
+  EXPECT_LT(worst_m, 1e-4);   // the map point is where the pixel's ray meets the surface (float32)
+  EXPECT_LT(worst_px, 1e-3);  // and reprojects to that pixel
+  const auto n = static_cast<double>(dn_image.size());
+  double ma = 0, mb = 0;
+  for (std::size_t i = 0; i < dn_image.size(); ++i) ma += dn_image[i] / n, mb += dn_map[i] / n;
+  double sab = 0, saa = 0, sbb = 0;
+  int close = 0;
+  for (std::size_t i = 0; i < dn_image.size(); ++i) {
+    sab += (dn_image[i] - ma) * (dn_map[i] - mb);
+    saa += (dn_image[i] - ma) * (dn_image[i] - ma);
+    sbb += (dn_map[i] - mb) * (dn_map[i] - mb);
+    close += std::abs(dn_image[i] - dn_map[i]) < 10.0;
+  }
+  const double correlation = sab / std::sqrt(saa * sbb);
+  std::printf(
+      "map vs image: %zu visible points, correlation %.4f, %.1f %% within 10 DN, worst %.2e m, %.2e px\n",
+      dn_image.size(), correlation, 100.0 * close / n, worst_m, worst_px);
+  EXPECT_GE(correlation, 0.95);
+  EXPECT_GE(close / n, 0.90);
+}
+
+TEST_F(GeneratedIndoor, SameSeedGivesIdenticalBytesWhateverTheThreadCount) {
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const auto again = generate_dataset(test::indoor_request(dir_->path() / "again"));
+  omp_set_num_threads(threads);
+  ASSERT_TRUE(again.ok()) << again.status();
+  const auto a = test::read_tree(dir_->path() / "seq");
+  const auto b = test::read_tree(dir_->path() / "again");
+  ASSERT_EQ(a.size(), b.size());
+  for (const auto& [name, bytes] : a) {
+    ASSERT_TRUE(b.count(name)) << name;
+    EXPECT_TRUE(bytes == b.at(name)) << name << " differs";
+  }
+}
+
+TEST_F(GeneratedIndoor, AnotherSeedChangesImagesImuAndMap) {
+  GeneratorRequest r = test::indoor_request(dir_->path() / "seed2");
+  r.options.seed = 2;
+  ASSERT_TRUE(generate_dataset(r).ok());
+  const auto a = test::read_tree(dir_->path() / "seq");
+  const auto b = test::read_tree(dir_->path() / "seed2");
+  for (const char* f : {"mav0/imu0/data.csv", "mav0/pointcloud0/data.ply", "sim0/scene.yaml"}) {
+    EXPECT_NE(a.at(f), b.at(f)) << f;
+  }
+  // The motion depends on the trajectory only; the true biases (also in the ground truth) on
+  // the seed.
+  EXPECT_EQ(a.at("sim0/imu_noiseless.csv"), b.at("sim0/imu_noiseless.csv"));
+  auto gt_a = io::read_euroc_groundtruth(dir_->path() / "seq/mav0/state_groundtruth_estimate0/data.csv");
+  auto gt_b = io::read_euroc_groundtruth(dir_->path() / "seed2/mav0/state_groundtruth_estimate0/data.csv");
+  ASSERT_TRUE(gt_a.ok() && gt_b.ok());
+  ASSERT_EQ(gt_a->size(), gt_b->size());
+  for (std::size_t k = 0; k < gt_a->size(); ++k) {
+    ASSERT_EQ((*gt_a)[k].T_w_b.matrix(), (*gt_b)[k].T_w_b.matrix()) << k;
+  }
+  EXPECT_NE(gt_a->back().bias_accel, gt_b->back().bias_accel);
+}
+
+// Bad input: a clear error, nothing at --out, no staging folder left in its parent.
+class GeneratorBadInput : public ::testing::Test {
+ protected:
+  void expect_fails_cleanly(const GeneratorRequest& r, const std::string& message_part) {
+    auto report = generate_dataset(r);
+    ASSERT_FALSE(report.ok());
+    EXPECT_THAT(std::string(report.status().message()), HasSubstr(message_part));
+    EXPECT_FALSE(std::filesystem::exists(r.out));
+    if (std::filesystem::exists(r.out.parent_path())) {
+      for (const std::string& name : test::list_dir(r.out.parent_path())) {
+        EXPECT_EQ(name.find(".partial"), std::string::npos) << name << " left behind";
+      }
+    }
+  }
+  mrvs::test::TempDir dir_;
+};
+
+TEST_F(GeneratorBadInput, MissingTrajectoryFile) {
+  GeneratorRequest r = test::indoor_request(dir_ / "out");
+  r.trajectory = dir_ / "no_such_trajectory.txt";
+  expect_fails_cleanly(r, "no_such_trajectory.txt");
+}
+
+TEST_F(GeneratorBadInput, MalformedTrajectoryFile) {
+  GeneratorRequest r = test::indoor_request(dir_ / "out");
+  r.trajectory = dir_.write("bad.txt", "1403715274.30214 0.878612 2.142470 0.947262 -0.828459 -0.058956\n");
+  expect_fails_cleanly(r, "bad.txt:1");
+}
+
+TEST_F(GeneratorBadInput, WindowOutsideTheTrajectory) {
+  GeneratorRequest r = test::indoor_request(dir_ / "out", 5.0, 1000.0);
+  expect_fails_cleanly(r, "window");
+}
+
+TEST_F(GeneratorBadInput, UnwritableOutputFolder) {
+  dir_.write("a_file", "x");
+  GeneratorRequest r = test::indoor_request(dir_ / "a_file" / "out");
+  auto report = generate_dataset(r);
+  ASSERT_FALSE(report.ok());
+  EXPECT_THAT(std::string(report.status().message()), HasSubstr("a_file"));
+}
+
+TEST_F(GeneratorBadInput, ExistingOutputIsKeptUnlessOverwriteIsAsked) {
+  dir_.write("out/keep.txt", "mine");
+  GeneratorRequest r = test::indoor_request(dir_ / "out", 0.3);
+  auto refused = generate_dataset(r);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(std::string(refused.status().message()), HasSubstr("--overwrite"));
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "out/keep.txt"));
+  r.overwrite = true;
+  ASSERT_TRUE(generate_dataset(r).ok());
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "out/keep.txt"));
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "out/mav0/imu0/data.csv"));
+  for (const std::string& name : test::list_dir(dir_.path()))
+    EXPECT_EQ(name.find(".partial"), std::string::npos);
+}
+
+TEST(GeneratorOutdoor, WritesAKaistLikeSequenceTheReaderTakes) {
+  mrvs::test::TempDir dir;
+  GeneratorRequest r;
+  r.profile = SceneProfile::kOutdoor;
+  r.out = dir / "street";
+  r.options = default_options(SceneProfile::kOutdoor);
+  r.options.trajectory.window_start_s = 10.0;  // moving
+  r.options.trajectory.window_duration_s = 1.0;
+  auto report = generate_dataset(r);
+  ASSERT_TRUE(report.ok()) << report.status();
+  io::DatasetOptions options;
+  options.path = dir / "street";
+  auto dataset = io::open_dataset("euroc", options);
+  ASSERT_TRUE(dataset.ok()) << dataset.status();
+  EXPECT_TRUE((*dataset)->warnings().empty());
+  EXPECT_EQ((*dataset)->stereo_frames().size(), 10u);  // 10 Hz
+  EXPECT_EQ((*dataset)->imu().size(), 101u);           // 100 Hz
+  EXPECT_NEAR((*dataset)->calibration().T_c0_c1().translation().norm(), 0.47515, 5e-5);
+  auto image = (*dataset)->load_image(0, (*dataset)->images()[0].front());
+  ASSERT_TRUE(image.ok()) << image.status();
+  EXPECT_EQ(image->cols, 1280);
+  EXPECT_EQ(image->rows, 560);
+  EXPECT_GT(report->map_points, 1000);
+  // The car moves at about 10 m/s.
+  const auto& gt = (*dataset)->groundtruth();
+  EXPECT_NEAR(gt.back().v_w_b.norm(), 10.0, 1.0);
+}
+
+TEST(GeneratorOptions, PresetsAndProfilesDiffer) {
+  SimulatorOptions easy = default_options(SceneProfile::kIndoor);
+  SimulatorOptions realistic = easy;
+  ASSERT_TRUE(apply_preset("easy", easy).ok());
+  ASSERT_TRUE(apply_preset("realistic", realistic).ok());
+  EXPECT_FALSE(easy == realistic);
+  EXPECT_GT(realistic.render.read_noise_sigma, 0.0);
+  EXPECT_TRUE(realistic.render.exposure_walk);
+  EXPECT_GT(realistic.map.holes_fraction, 0.0);
+  const Status bad = apply_preset("hard", easy);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_THAT(std::string(bad.message()), HasSubstr("easy, realistic"));
+  EXPECT_NE(default_options(SceneProfile::kOutdoor).imu.gravity_magnitude,
+            default_options(SceneProfile::kIndoor).imu.gravity_magnitude);
+  EXPECT_FALSE(parse_profile("underwater").ok());
+}
+
+}  // namespace
+}  // namespace mrvs::sim
