@@ -1,0 +1,92 @@
+#pragma once
+// Ray queries against a VoxelMap (algorithm.md 2.4-2.6 and decision 3): 3D-DDA
+// (Amanatides-Woo) over the level a ray asks for, from d - R to d + R, returning the first
+// occupied voxel's point; the in-view acceptance as a perpendicular-distance test on the
+// ray; the retry ranges; the optional plane refinement. Read-only and thread-safe without
+// locks; no allocation per ray.
+//
+// All positions are map-local (relative to VoxelMap::origin), as on the wire.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "mrvs/config/options.h"
+#include "mrvs/core/status.h"
+#include "mrvs/map/voxel_map.h"
+
+namespace mrvs::map {
+
+/// One ray query (the 32-byte wire message, map-local).
+struct RayQuery {
+  Eigen::Vector3f origin = Eigen::Vector3f::Zero();      ///< ray origin (camera centre), m
+  float initial_distance = 0.0f;                         ///< d: distance to the triangulated feature, m
+  Eigen::Vector3f direction = Eigen::Vector3f::UnitZ();  ///< v: direction (need not be unit)
+  float resolution = 0.0f;                               ///< r*: level to traverse, m
+};
+
+enum class QueryStatus : std::uint8_t {
+  kHit,                ///< point accepted
+  kMiss,               ///< no occupied voxel in any search range
+  kRejected,           ///< occupied voxels found, none passed the in-view test
+  kInvalidRay,         ///< non-finite value, zero direction or negative distance
+  kUnknownResolution,  ///< resolution matches no level
+};
+
+struct QueryResult {
+  QueryStatus status = QueryStatus::kMiss;
+  Eigen::Vector3f point = Eigen::Vector3f::Zero();  ///< map-local, m (valid for kHit)
+  std::int8_t level = -1;                           ///< level traversed
+  std::uint8_t passes = 0;                          ///< DDA passes made (1 or 2)
+  bool refined = false;                             ///< point is a ray-plane intersection
+};
+
+struct QueryOptions : config::OptionsEquality<QueryOptions> {
+  double search_range_m = 0.75;            ///< R0: DDA from d - R to d + R (indoor 0.75, outdoor 1.5)
+  double threshold_offset_px = 0.5;        ///< in-view: perpendicular distance <= r + offset * d / f
+  double focal_length_px = 458.0;          ///< f used by the in-view test (the edge cameras' focal)
+  bool refine_plane_intersection = false;  ///< return the ray-plane intersection (algorithm.md 2.6)
+  double min_planarity = 0.10;             ///< plane fit acceptance, (s2 - s3) / s1
+  int max_rays_per_batch = 256;            ///< requests with more rays are refused
+
+  template <class V>
+  void visit(V& v) {
+    using namespace mrvs::config::constraints;
+    v("search_range_m", search_range_m, in_range(0.01, 100.0), "DDA range around d, m (R0)");
+    v("threshold_offset_px", threshold_offset_px, in_range(0.0, 100.0), "in-view offset, px");
+    v("focal_length_px", focal_length_px, in_range(1.0, 100000.0), "focal length for the in-view test, px");
+    v("refine_plane_intersection", refine_plane_intersection, any(), "return ray-plane intersections");
+    v("min_planarity", min_planarity, in_range(0.0, 1.0), "plane fit acceptance");
+    v("max_rays_per_batch", max_rays_per_batch, in_range(1, 65536), "rays per request");
+  }
+};
+
+/// The first occupied voxel along a ray segment (for tests and diagnostics).
+struct VoxelHit {
+  std::uint32_t point_index = 0;  ///< into VoxelMap::levels[level].points
+  float t_entry = 0.0f;           ///< ray parameter where the voxel is entered, m (unit direction)
+};
+
+class QueryEngine {
+ public:
+  /// Builds the per-level indices. `map` is shared (read-only) with the engine.
+  static StatusOr<QueryEngine> create(std::shared_ptr<const VoxelMap> map, const QueryOptions& options);
+
+  /// One query with retries and acceptance. Thread-safe, allocation-free.
+  QueryResult query(const RayQuery& ray) const;
+
+  /// First occupied voxel of `level` along origin + t * unit(direction), t in [t_start, t_end].
+  std::optional<VoxelHit> first_hit(int level, const Eigen::Vector3f& origin,
+                                    const Eigen::Vector3f& direction, float t_start, float t_end) const;
+
+  const VoxelMap& map() const;
+  const QueryOptions& options() const;
+
+ private:
+  struct Impl;
+  std::shared_ptr<const Impl> impl_;
+};
+
+}  // namespace mrvs::map
