@@ -221,4 +221,12 @@ std::string expected_error(const YamlDocument& doc, const YAML::Node& node, cons
                      expected, node_text(node));
 }
 
+StatusOr<YamlDocument> load_yaml_with_overrides(const std::filesystem::path& file,
+                                                const std::vector<std::string>& overrides) {
+  MRVS_ASSIGN_OR_RETURN(YamlDocument doc,
+                        file.empty() ? parse_yaml_string("", "<command line>") : load_yaml_file(file));
+  MRVS_RETURN_IF_ERROR(apply_overrides(doc, overrides));
+  return doc;
+}
+
 }  // namespace mrvs::config

@@ -77,13 +77,8 @@ mrvs::StatusOr<mrvs::sim::SimulatorOptions> resolve_options(const Args& a, mrvs:
   if (a.start_s >= 0) overrides.push_back(fmt::format("trajectory.window_start_s={}", a.start_s));
   if (a.duration_s >= 0) overrides.push_back(fmt::format("trajectory.window_duration_s={}", a.duration_s));
   overrides.insert(overrides.end(), a.overrides.begin(), a.overrides.end());
-  mrvs::config::YamlDocument doc;
-  if (!a.config.empty()) {
-    MRVS_ASSIGN_OR_RETURN(doc, mrvs::config::load_yaml_file(a.config));
-  } else {
-    MRVS_ASSIGN_OR_RETURN(doc, mrvs::config::parse_yaml_string("", "<command line>"));
-  }
-  MRVS_RETURN_IF_ERROR(mrvs::config::apply_overrides(doc, overrides));
+  MRVS_ASSIGN_OR_RETURN(const mrvs::config::YamlDocument doc,
+                        mrvs::config::load_yaml_with_overrides(a.config, overrides));
   MRVS_RETURN_IF_ERROR(mrvs::config::update_options(doc, "", options));
   return options;
 }

@@ -62,9 +62,9 @@ TEST(WireSizes, ReplyBatchIsHeaderPlus12BytesPerHitAndOneBitPerRay) {
   reply.points().resize(200);
   const auto all_points = serialize(type, reply).length;
   EXPECT_EQ(all_points - no_points, 200u * 12u);
-  // encapsulation 4 + seq 8 + stamp 8 + client 4 + status 4 + bad index 4
-  // + mask (4 + 25, padded to 32) + points length 4
-  EXPECT_EQ(no_points, 4u + 8u + 8u + 4u + 4u + 4u + 32u + 4u);
+  // encapsulation 4 + seq 8 + client 4 + status 4 + bad index 4 + mask (4 + 25, padded to
+  // 32) + points length 4
+  EXPECT_EQ(no_points, 4u + 8u + 4u + 4u + 4u + 32u + 4u);
 }
 
 TEST(WireSizes, RoundTripPreservesEveryField) {

@@ -33,7 +33,7 @@ TEST(Resolution, TiesGoToTheEarlierLevelAndOrderIsTheListsOrder) {
   // strict comparison keeps the first level of the list.
   EXPECT_EQ(*select_level({0.25, 0.5}, 375.0, 1000.0), 0u);
   EXPECT_EQ(*select_level({0.5, 0.25}, 375.0, 1000.0), 0u);
-  EXPECT_EQ(*select_level({0.05}, 1000.0, 1.0), 0u);         // a single level is always chosen
+  EXPECT_EQ(*select_level({0.05}, 1000.0, 1.0), 0u);  // a single level is always chosen
 }
 
 TEST(Resolution, InvalidInputsGiveNothing) {
@@ -43,6 +43,17 @@ TEST(Resolution, InvalidInputsGiveNothing) {
   EXPECT_FALSE(select_level({0.01}, 1.0, 0.0).has_value());
   EXPECT_FALSE(select_level({0.01}, std::nan(""), 458.0).has_value());
   EXPECT_FALSE(select_level({0.01}, INFINITY, 458.0).has_value());
+}
+
+TEST(Resolution, FindLevelMatchesFloat32ResolutionsOnly) {
+  const std::vector<double> levels = {0.01, 0.02, 0.03};
+  EXPECT_EQ(*find_level(levels, static_cast<double>(0.02f)), 1u);  // as sent on the wire
+  EXPECT_EQ(*find_level(levels, 0.0300001), 2u);
+  EXPECT_FALSE(find_level(levels, 0.015).has_value());
+  EXPECT_FALSE(find_level(levels, 0.0201).has_value());
+  EXPECT_FALSE(find_level(levels, 0.0).has_value());
+  EXPECT_FALSE(find_level(levels, std::nan("")).has_value());
+  EXPECT_FALSE(find_level({}, 0.01).has_value());
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "mrvs/config/yaml_document.h"
 #include "mrvs/core/file.h"
 #include "mrvs/io/dataset.h"
 #include "mrvs/io/trajectory_io.h"
@@ -191,9 +192,20 @@ std::string config_yaml(const GeneratorRequest& r, const World& world) {
       config::options_to_yaml(r.options, "", style));
 }
 
+/// sim0/request.yaml: what load_generator_request needs besides config.yaml.
+std::string request_yaml(const GeneratorRequest& r) {
+  const std::string trajectory =
+      r.trajectory.empty() ? "" : fs::absolute(r.trajectory).lexically_normal().string();
+  return fmt::format(
+      "# How this sequence was made (read by load_generator_request; options in config.yaml).\n"
+      "generator: \"{}\"\nprofile: {}\npreset: {}\ntrajectory: \"{}\"\n",
+      generator_version(), profile_name(r.profile), r.preset, trajectory);
+}
+
 Status write_truth_files(const GeneratorRequest& r, const World& world, const fs::path& sim0) {
   const PriorMap& map = world.map;
   MRVS_RETURN_IF_ERROR(write_file_atomically(sim0 / "config.yaml", config_yaml(r, world)));
+  MRVS_RETURN_IF_ERROR(write_file_atomically(sim0 / "request.yaml", request_yaml(r)));
   MRVS_RETURN_IF_ERROR(write_file_atomically(sim0 / "scene.yaml", world.scene->to_yaml()));
   std::vector<io::ImuSample> noiseless;
   noiseless.reserve(world.imu.size());
@@ -217,6 +229,30 @@ Status make_folders(const fs::path& root) {
 }
 
 }  // namespace
+
+StatusOr<GeneratorRequest> load_generator_request(const fs::path& sequence) {
+  const fs::path sim0 = sequence / "sim0";
+  MRVS_ASSIGN_OR_RETURN(const config::YamlDocument request, config::load_yaml_file(sim0 / "request.yaml"));
+  GeneratorRequest r;
+  r.out = sequence;
+  try {
+    MRVS_ASSIGN_OR_RETURN(r.profile, parse_profile(request.root["profile"].as<std::string>()));
+    r.preset = request.root["preset"].as<std::string>();
+    r.trajectory = request.root["trajectory"].as<std::string>();
+  } catch (const YAML::Exception& e) {
+    return absl::InvalidArgumentError(fmt::format("{}: needs keys profile, preset and trajectory ({})",
+                                                  (sim0 / "request.yaml").string(), e.what()));
+  }
+  if (!r.trajectory.empty() && !fs::exists(r.trajectory)) {
+    return absl::NotFoundError(
+        fmt::format("{} was made from {}, which no longer exists", sequence.string(), r.trajectory.string()));
+  }
+  r.options = default_options(r.profile);
+  MRVS_RETURN_IF_ERROR(apply_preset(r.preset, r.options));
+  MRVS_ASSIGN_OR_RETURN(const config::YamlDocument options, config::load_yaml_file(sim0 / "config.yaml"));
+  MRVS_RETURN_IF_ERROR(config::update_options(options, "", r.options));
+  return r;
+}
 
 std::string generator_version() { return fmt::format("mrvs dataset_simulator {}", MRVS_VERSION); }
 

@@ -83,6 +83,22 @@ TEST_F(GeneratedIndoor, TheProjectsEurocReaderTakesItUnchanged) {
   }
 }
 
+TEST_F(GeneratedIndoor, TheRequestReadBackRebuildsTheSameWorld) {
+  auto request = load_generator_request(dir_->path() / "seq");
+  ASSERT_TRUE(request.ok()) << request.status();
+  EXPECT_TRUE(request->options == request_->options);
+  EXPECT_EQ(request->profile, request_->profile);
+  EXPECT_EQ(request->preset, request_->preset);
+  EXPECT_EQ(std::filesystem::canonical(request->trajectory),
+            std::filesystem::canonical(request_->trajectory));
+  auto world = build_world(*request);
+  ASSERT_TRUE(world.ok()) << world.status();
+  ASSERT_EQ(world->map.points.size(), world_->map.points.size());
+  EXPECT_EQ(world->map.points.back().position, world_->map.points.back().position);
+  EXPECT_EQ(world->frame_pose(5).matrix(), world_->frame_pose(5).matrix());
+  EXPECT_FALSE(load_generator_request(dir_->path() / "nowhere").ok());
+}
+
 TEST_F(GeneratedIndoor, StampsAreExactAndCamerasTickOnImuStamps) {
   const auto& imu = dataset_->imu();
   for (std::size_t k = 1; k < imu.size(); ++k) ASSERT_EQ(imu[k].t_ns - imu[k - 1].t_ns, 5'000'000) << k;

@@ -7,14 +7,19 @@
 // Coordinates: positions are float32 relative to `origin` (double, map frame), so a map
 // with UTM-sized coordinates keeps sub-millimetre precision within +-8 km of the origin.
 // Voxel (i, j, k) of level r holds the points with floor((p - origin) / r) == (i, j, k),
-// p - origin computed in double (mrvs::voxel::index_of on the local position).
+// p - origin computed in double (mrvs::voxel::index_of on the local position). For a
+// stored point, p - origin is its float32 position converted to double (voxel_of below):
+// the builder assigns voxels from the rounded float positions it stores, so a loaded map
+// indexes exactly like the builder did.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "mrvs/geometry/types.h"
+#include "mrvs/voxel/voxel_key.h"
 
 namespace mrvs::map {
 
@@ -41,6 +46,12 @@ struct VoxelMap {
   int level_of(double resolution) const;
   /// Resolutions of all levels, finest first.
   std::vector<double> resolutions() const;
+  /// Total number of points over all levels.
+  std::uint64_t point_count() const;
 };
+
+/// Voxel of a stored, map-local position at `resolution` (metres): floor(double(p) / r) per
+/// axis. nullopt when p is not finite or the index cannot be packed (mrvs::voxel::pack).
+std::optional<voxel::VoxelIndex> voxel_of(const Eigen::Vector3f& local_position, double resolution);
 
 }  // namespace mrvs::map

@@ -6,6 +6,7 @@
 // locks; no allocation per ray.
 //
 // All positions are map-local (relative to VoxelMap::origin), as on the wire.
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -16,16 +17,12 @@
 #include "mrvs/config/options.h"
 #include "mrvs/core/status.h"
 #include "mrvs/map/voxel_map.h"
+#include "mrvs/voxel/ray_query.h"
 
 namespace mrvs::map {
 
-/// One ray query (the 32-byte wire message, map-local).
-struct RayQuery {
-  Eigen::Vector3f origin = Eigen::Vector3f::Zero();      ///< ray origin (camera centre), m
-  float initial_distance = 0.0f;                         ///< d: distance to the triangulated feature, m
-  Eigen::Vector3f direction = Eigen::Vector3f::UnitZ();  ///< v: direction (need not be unit)
-  float resolution = 0.0f;                               ///< r*: level to traverse, m
-};
+/// One ray query (the 32-byte wire message, map-local); shared with the edge.
+using RayQuery = voxel::RayQuery;
 
 enum class QueryStatus : std::uint8_t {
   kHit,                ///< point accepted
@@ -37,10 +34,11 @@ enum class QueryStatus : std::uint8_t {
 
 struct QueryResult {
   QueryStatus status = QueryStatus::kMiss;
-  Eigen::Vector3f point = Eigen::Vector3f::Zero();  ///< map-local, m (valid for kHit)
-  std::int8_t level = -1;                           ///< level traversed
-  std::uint8_t passes = 0;                          ///< DDA passes made (1 or 2)
-  bool refined = false;                             ///< point is a ray-plane intersection
+  /// Map-local, m: the accepted point (kHit) or the last rejected one (kRejected).
+  Eigen::Vector3f point = Eigen::Vector3f::Zero();
+  std::int8_t level = -1;   ///< level traversed
+  std::uint8_t passes = 0;  ///< DDA passes made (1 or 2)
+  bool refined = false;     ///< point is a ray-plane intersection
 };
 
 struct QueryOptions : config::OptionsEquality<QueryOptions> {
@@ -69,6 +67,18 @@ struct VoxelHit {
   float t_entry = 0.0f;           ///< ray parameter where the voxel is entered, m (unit direction)
 };
 
+/// Work counters accumulated by the counting query() overload (benchmarks, diagnostics).
+struct QueryCounters {
+  std::uint64_t rays = 0;             ///< queries
+  std::uint64_t passes = 0;           ///< DDA passes
+  std::uint64_t bricks = 0;           ///< 8x8x8-voxel bricks visited (empty ones are crossed in one step)
+  std::uint64_t occupied_bricks = 0;  ///< of those, bricks holding points (walked voxel by voxel)
+  std::uint64_t voxels = 0;           ///< voxels tested inside occupied bricks
+  std::uint64_t refined = 0;          ///< hits replaced by a ray-plane intersection
+
+  QueryCounters& operator+=(const QueryCounters& o);
+};
+
 class QueryEngine {
  public:
   /// Builds the per-level indices. `map` is shared (read-only) with the engine.
@@ -76,13 +86,21 @@ class QueryEngine {
 
   /// One query with retries and acceptance. Thread-safe, allocation-free.
   QueryResult query(const RayQuery& ray) const;
+  /// The same query, adding the work done to `*counters` (slightly slower).
+  QueryResult query(const RayQuery& ray, QueryCounters* counters) const;
 
-  /// First occupied voxel of `level` along origin + t * unit(direction), t in [t_start, t_end].
+  /// First occupied voxel of `level` along origin + t * unit(direction), t in [t_start, t_end]
+  /// (a voxel counts when entered at t <= t_end; the voxel holding the start point counts with
+  /// t_entry = t_start). nullopt for no hit, an unknown level, non-finite input, a zero
+  /// direction or t_start > t_end.
   std::optional<VoxelHit> first_hit(int level, const Eigen::Vector3f& origin,
                                     const Eigen::Vector3f& direction, float t_start, float t_end) const;
 
   const VoxelMap& map() const;
   const QueryOptions& options() const;
+
+  /// Bytes held by the per-level indices (not counting the shared VoxelMap).
+  std::size_t index_memory_bytes() const;
 
  private:
   struct Impl;

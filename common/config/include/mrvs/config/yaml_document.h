@@ -47,6 +47,11 @@ StatusOr<YamlDocument> parse_yaml_string(const std::string& text, const std::str
 /// On error `doc` is left unchanged.
 Status apply_overrides(YamlDocument& doc, const std::vector<std::string>& overrides);
 
+/// What every tool does with its `--config FILE` and `--set key=value` flags: the file (or an
+/// empty document named "<command line>" when `file` is empty) with the overrides applied.
+StatusOr<YamlDocument> load_yaml_with_overrides(const std::filesystem::path& file,
+                                                const std::vector<std::string>& overrides);
+
 /// Resolves a path written in `doc`: absolute paths are returned as they are, relative
 /// ones are taken relative to the folder of the file (`calibration: euroc/imu.yaml`) and
 /// made absolute (so the result stays valid when written to another file).

@@ -28,6 +28,17 @@ inline std::optional<std::size_t> select_level(const std::vector<double>& resolu
   return best;
 }
 
+/// Index of the level whose resolution equals `resolution` within a relative tolerance of
+/// 1e-4 (float32 on the wire), or nullopt. The one rule by which the cloud matches a ray's
+/// requested resolution to a map level.
+inline std::optional<std::size_t> find_level(const std::vector<double>& resolutions, double resolution) {
+  if (!(resolution > 0) || !std::isfinite(resolution)) return std::nullopt;
+  for (std::size_t i = 0; i < resolutions.size(); ++i) {
+    if (std::abs(resolutions[i] - resolution) <= 1e-4 * resolutions[i]) return i;
+  }
+  return std::nullopt;
+}
+
 /// Depth (m) at which select_level switches from level a to level b (a, b adjacent in
 /// `resolutions`): the footprint is then the midpoint, d = f (r_a + r_b) / 2.
 inline double switch_depth(double r_a, double r_b, double focal_px) { return focal_px * 0.5 * (r_a + r_b); }

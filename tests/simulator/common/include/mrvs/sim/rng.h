@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "mrvs/core/hash.h"
+
 namespace mrvs::sim {
 
 /// Independent random streams. Add new ones at the end; never renumber (it would change
@@ -27,13 +29,7 @@ enum class Stream : std::uint64_t {
   kRoute = 11,
 };
 
-/// splitmix64 finaliser: a bijective 64-bit mix with good avalanche.
-constexpr std::uint64_t mix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
+using mrvs::mix64;
 
 /// Stateless generator for one (seed, stream): value = f(seed, stream, a, b, c).
 class CounterRng {

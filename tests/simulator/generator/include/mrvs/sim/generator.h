@@ -79,6 +79,11 @@ StatusOr<World> build_world(const GeneratorRequest& request, const ProgressCallb
 StatusOr<GeneratorReport> generate_dataset(const GeneratorRequest& request,
                                            const ProgressCallback& progress = {});
 
+/// The request a generated sequence was made with, read back from its sim0/request.yaml and
+/// sim0/config.yaml (out = `sequence`): build_world() of it rebuilds the same world (scene,
+/// map, poses). Errors name the missing or malformed file.
+StatusOr<GeneratorRequest> load_generator_request(const std::filesystem::path& sequence);
+
 /// "mrvs dataset_simulator <version>".
 std::string generator_version();
 

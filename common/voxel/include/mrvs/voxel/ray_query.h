@@ -1,0 +1,15 @@
+#pragma once
+// One ray query, as the edge forms it and the cloud answers it (the paper's 32-byte uplink
+// per feature). Positions are map-local: relative to the map origin the cloud announces.
+#include <Eigen/Core>
+
+namespace mrvs::voxel {
+
+struct RayQuery {
+  Eigen::Vector3f origin = Eigen::Vector3f::Zero();      ///< ray origin (camera centre), m
+  float initial_distance = 0.0f;                         ///< d: distance to the triangulated feature, m
+  Eigen::Vector3f direction = Eigen::Vector3f::UnitZ();  ///< v: direction (need not be unit)
+  float resolution = 0.0f;                               ///< r*: voxel size of the level to traverse, m
+};
+
+}  // namespace mrvs::voxel
