@@ -27,21 +27,28 @@ link_prepare() {
 link_run() {
   local profile=$1 frames=$2 rate=$3 out=$4 capture=${5:-0}
   mkdir -p "$out"
+  rm -f "$out/capture.pcap" "$out/probe.txt"  # never report an earlier run's figures
   netns_run "$NS_CLOUD" "$out/server.log" "$MRVS_BUILD/bin/cloud_server" --map "$LINK_MAP" \
       --dds-profile "$MRVS_ROOT/config/dds/$profile.xml" --dds-interface "$IP_CLOUD" --dds-peer "$IP_EDGE" \
       --config "$MRVS_ROOT/config/map_indoor.yaml" --stats-period 0
   local server=$NETNS_LAST_PID
   local tshark_pid=""
   if [[ $capture == 1 ]]; then
-    rm -f "$out/capture.pcap"
     netns_run "$NS_EDGE" "$out/tshark.log" tshark -q -i "$DEV_EDGE" -w "$out/capture.pcap" \
         -f "udp portrange $(dds_port_range 42) or (ip[6:2] & 0x1fff != 0)"
     tshark_pid=$NETNS_LAST_PID
     sleep 2
   fi
-  ip netns exec "$NS_EDGE" "$MRVS_BUILD/bin/link_probe" --sequence "$LINK_SEQUENCE" \
+  # In the background + wait: a signal to this script is handled at once (bash defers traps
+  # while a foreground child runs), and the cleanup stops the probe too.
+  (trap - EXIT INT TERM; exec ip netns exec "$NS_EDGE" "$MRVS_BUILD/bin/link_probe" --sequence "$LINK_SEQUENCE" \
       --dds-profile "$MRVS_ROOT/config/dds/$profile.xml" --dds-interface "$IP_EDGE" --dds-peer "$IP_CLOUD" \
-      --frames "$frames" --rate "$rate" --timeout-ms 1000 --map-wait 30 --log-level warn >"$out/probe.txt"
+      --frames "$frames" --rate "$rate" --timeout-ms 1000 --map-wait 30 --log-level warn) >"$out/probe.txt" &
+  local probe=$!
+  NETNS_PIDS+=("$probe")
+  local status=0
+  wait "$probe" || status=$?
+  [[ $status -eq 0 ]] || { echo "link_probe failed (exit $status); server log: $out/server.log" >&2; return "$status"; }
   [[ -n $tshark_pid ]] && { sleep 1; netns_stop "$tshark_pid" INT; }
   netns_stop "$server"
   return 0

@@ -44,7 +44,7 @@ netns_cleanup() {
 
 # netns_create: the two namespaces, the veth pair, addresses, loopback up.
 netns_create() {
-  trap netns_cleanup EXIT
+  trap 'netns_cleanup 2>/dev/null' EXIT  # bash 5.2 may print a spurious "wait_for: No record" here
   trap 'exit 130' INT TERM
   ip netns add "$NS_CLOUD"
   ip netns add "$NS_EDGE"
@@ -92,4 +92,25 @@ netns_run() {
   NETNS_LAST_PID=$!
   disown "$NETNS_LAST_PID"  # tracked here, stopped with netns_stop (not bash job control)
   NETNS_PIDS+=("$NETNS_LAST_PID")
+}
+
+# netns_qdisc_bytes NS DEV: bytes the root qdisc of DEV has sent so far.
+netns_qdisc_bytes() {
+  ip netns exec "$1" tc -s qdisc show dev "$2" | awk '$1 == "Sent" { print $2; exit }'
+}
+
+# netns_measure_rate BYTES: one TCP transfer of BYTES from the cloud to the edge host; prints
+# "GOODPUT_BYTES_PER_S WIRE_BYTES_PER_S" (wire: Ethernet bytes the cloud qdisc sent over the
+# transfer time). Run it before netns_loss: drops would measure TCP's recovery, not the link.
+netns_measure_rate() {
+  local bytes=$1 port=5399 result wire0 wire1
+  local tool=$MRVS_ROOT/scripts/lib/measure_rate.py
+  wire0=$(netns_qdisc_bytes "$NS_CLOUD" "$DEV_CLOUD")
+  result=$(ip netns exec "$NS_EDGE" timeout 60 python3 "$tool" recv "$port" 30 &
+           sleep 0.3
+           ip netns exec "$NS_CLOUD" timeout 60 python3 "$tool" send "$IP_EDGE" "$port" "$bytes" >&2
+           wait)
+  wire1=$(netns_qdisc_bytes "$NS_CLOUD" "$DEV_CLOUD")
+  awk -v r="$result" -v w="$((wire1 - wire0))" 'BEGIN {
+    split(r, f, " "); if (f[2] <= 0) exit 1; printf "%.0f %.0f\n", f[1] / f[2], w / f[2] }'
 }

@@ -57,8 +57,9 @@ void add_options(CLI::App& app, Args& a) {
   app.add_option("--rays", a.rays, "Rays per frame (the paper: 200)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
-  app.add_option("--frames", a.frames, "Frames to send, 0 = every frame of the sequence")
-      ->capture_default_str();
+  app.add_option("--frames", a.frames, "Frames to send (0 = the sequence once; more frames replay it)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10000000));
   app.add_option("--timeout-ms", a.timeout_ms, "Per-frame deadline, ms (0 = the frame interval)")
       ->capture_default_str();
   app.add_option("--distance-error", a.distance_error, "Relative error (1 sigma) of the initial distance d")
@@ -71,11 +72,14 @@ void add_options(CLI::App& app, Args& a) {
 }
 
 /// The rays of frame k (map-local, as the edge would send them).
+/// Rays of probe frame k from the camera pose of sequence frame `pose_index` (the pixels and
+/// distance errors are drawn per probe frame, so a replayed lap asks different rays).
 std::vector<mrvs::voxel::RayQuery> frame_rays(const mrvs::sim::World& world, std::size_t k,
-                                              const mrvs::link::MapInfo& info, const Args& a) {
+                                              std::size_t pose_index, const mrvs::link::MapInfo& info,
+                                              const Args& a) {
   const mrvs::sim::CounterRng rng(static_cast<std::uint64_t>(a.seed), mrvs::sim::Stream::kImageNoise);
   const auto& cam = world.calibration.cameras[0];
-  const mrvs::SE3d T_w_c = world.frame_pose(k) * cam.T_b_c;
+  const mrvs::SE3d T_w_c = world.frame_pose(pose_index) * cam.T_b_c;
   const mrvs::SE3d& T_map_w = world.map.T_map_world;
   const double focal = 0.5 * (cam.model->fx() + cam.model->fy());
   std::vector<mrvs::voxel::RayQuery> rays;
@@ -175,7 +179,7 @@ int run(const Args& a) {
   spdlog::info("map {} ({} levels), client id {}", info->map_id, info->resolutions.size(),
                (*client)->client_id());
   const std::size_t available = world->grid.camera_true_ns.size();
-  const std::size_t frames = a.frames > 0 ? std::min<std::size_t>(a.frames, available) : available;
+  const std::size_t frames = a.frames > 0 ? static_cast<std::size_t>(a.frames) : available;
   const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / a.rate_hz));
   const DurationNs timeout = a.timeout_ms > 0 ? static_cast<DurationNs>(a.timeout_ms * 1e6) : period.count();
   Totals totals;
@@ -188,8 +192,9 @@ int run(const Args& a) {
   const Clock::time_point start = Clock::now();
   for (std::size_t k = 0; k < frames; ++k) {
     std::this_thread::sleep_until(start + k * period);
-    const auto rays = frame_rays(*world, k, *info, a);
-    const auto reply = (*client)->query(rays, world->grid.camera_stamp_ns[k], timeout);
+    const std::size_t pose_index = k % available;
+    const auto rays = frame_rays(*world, k, pose_index, *info, a);
+    const auto reply = (*client)->query(rays, world->grid.camera_stamp_ns[pose_index], timeout);
     account(rays, reply, totals);
     if (a.per_frame) {
       fmt::print("frame {} rays {} outcome {} rtt_ms {:.3f}\n", k, rays.size(),
