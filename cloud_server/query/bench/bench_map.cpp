@@ -11,6 +11,7 @@
 // default 2 s; MRVS_BENCH_SPACING_M: map spacing, default 0.015).
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -57,9 +58,10 @@ struct Bench {
   double seconds_build = 0.0;
   std::uint64_t rss_before_build = 0;
   std::uint64_t rss_after_build = 0;
-  std::vector<RayQuery> rays_fixed;     ///< resolution 0.01 m
-  std::vector<RayQuery> rays_selected;  ///< resolution from select_level
-  double true_hit_fraction = 0.0;       ///< pixels whose ray hits a face
+  std::vector<RayQuery> rays_fixed;          ///< resolution 0.01 m
+  std::vector<RayQuery> rays_selected;       ///< resolution from select_level
+  std::vector<Eigen::Vector3f> true_points;  ///< map-local surface point each ray really meets
+  double true_hit_fraction = 0.0;            ///< pixels whose ray hits a face
 };
 
 sim::GeneratorRequest indoor_request() {
@@ -105,6 +107,7 @@ void make_rays(Bench& b) {
     q.initial_distance = static_cast<float>(hit->distance * (1.0 + noise(rng)));
     q.resolution = 0.01f;
     b.rays_fixed.push_back(q);
+    b.true_points.push_back((origin_m + hit->distance * dir_m - b.map->origin).cast<float>());
     const double depth = q.initial_distance * bearing->z();
     q.resolution =
         static_cast<float>(resolutions[voxel::select_level(resolutions, depth, focal).value_or(0)]);
@@ -175,11 +178,20 @@ void run_queries(benchmark::State& state, const std::vector<RayQuery>& rays, boo
   QueryCounters counters;
   std::size_t status_count[5] = {0, 0, 0, 0, 0};
   std::size_t finest = 0;
-  for (const RayQuery& q : rays) {
-    const QueryResult result = engine->query(q, &counters);
+  std::vector<double> errors_mm;  // accepted point to the true surface point of the ray
+  for (std::size_t k = 0; k < rays.size(); ++k) {
+    const QueryResult result = engine->query(rays[k], &counters);
     ++status_count[static_cast<int>(result.status)];
     finest += result.level == 0 ? 1 : 0;
+    if (result.status == QueryStatus::kHit)
+      errors_mm.push_back(1e3 * (result.point - b.true_points[k]).norm());
   }
+  std::sort(errors_mm.begin(), errors_mm.end());
+  const auto quantile = [&](double f) {
+    return errors_mm.empty() ? 0.0 : errors_mm[static_cast<std::size_t>(f * (errors_mm.size() - 1))];
+  };
+  state.counters["err_p50_mm"] = quantile(0.5);
+  state.counters["err_p90_mm"] = quantile(0.9);
   const auto n = static_cast<double>(rays.size());
   state.counters["hit"] = static_cast<double>(status_count[0]) / n;
   state.counters["miss"] = static_cast<double>(status_count[1]) / n;
