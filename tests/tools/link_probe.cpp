@@ -15,6 +15,7 @@
 
 #include "mrvs/core/cli.h"
 #include "mrvs/core/log.h"
+#include "mrvs/core/stats.h"
 #include "mrvs/edge/map_client.h"
 #include "mrvs/sim/generator.h"
 #include "mrvs/sim/rng.h"
@@ -104,12 +105,6 @@ std::vector<mrvs::voxel::RayQuery> frame_rays(const mrvs::sim::World& world, std
   return rays;
 }
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(std::min<double>(v.size() - 1, std::floor(p * (v.size() - 1) + 0.5)))];
-}
-
 struct Totals {
   std::vector<double> rtt_ms;
   std::size_t frames = 0, rays = 0, hits = 0, timeouts = 0, refused = 0;
@@ -149,8 +144,8 @@ void print_summary(const Totals& t) {
   fmt::print("SAMPLE_BYTES_UP_PER_FRAME: {:.0f}\nSAMPLE_BYTES_DOWN_PER_FRAME: {:.0f}\n", t.cdr_up / n,
              t.cdr_down / n);
   fmt::print("RTT_P50_MS: {:.3f}\nRTT_P95_MS: {:.3f}\nRTT_P99_MS: {:.3f}\nRTT_MAX_MS: {:.3f}\n",
-             percentile(t.rtt_ms, 0.5), percentile(t.rtt_ms, 0.95), percentile(t.rtt_ms, 0.99),
-             percentile(t.rtt_ms, 1.0));
+             mrvs::quantile(t.rtt_ms, 0.5), mrvs::quantile(t.rtt_ms, 0.95), mrvs::quantile(t.rtt_ms, 0.99),
+             mrvs::quantile(t.rtt_ms, 1.0));
   fmt::print("TIMEOUTS: {}\nREFUSED: {}\n", t.timeouts, t.refused);
 }
 

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "mrvs/core/stats.h"
 #include "render_test_world.h"
 
 namespace mrvs::sim {
@@ -58,11 +59,6 @@ KltResult track_pair(const RenderTestWorld& w, std::size_t k) {
     out.errors.push_back((Vec2d(p1[i].x, p1[i].y) - expected[i]).norm());
   }
   return out;
-}
-
-double quantile(std::vector<double> v, double q) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
 }
 
 TEST(RenderFlow, KltMatchesTrueFlowOnRealMotion) {
