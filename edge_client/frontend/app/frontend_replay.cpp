@@ -2,7 +2,7 @@
 // matching) over a EuRoC ASL sequence (real or generated) and reports tracking figures and
 // the paper's timing columns (a) image processing and (b) feature extraction and tracking.
 //
-//   frontend_replay --dataset DIR [--config config/edge_indoor.yaml] [--set tracker.max_features=150]
+//   frontend_replay --dataset DIR [--config config/euroc.yaml] [--set tracker.max_features=150]
 //       [--frames N] [--threads 1] [--per-frame]
 //
 // stdout: "KEY: value" lines; logs on stderr. Exit codes: 0 success, 1 data error (a missing
@@ -40,7 +40,7 @@ struct Args {
 
 void add_options(CLI::App& app, Args& a) {
   app.add_option("--dataset", a.dataset, "EuRoC ASL sequence folder (containing mav0/)")->required();
-  app.add_option("--config", a.config, "Tuning file with a `tracker` section (config/edge_indoor.yaml)")
+  app.add_option("--config", a.config, "Tuning file with a `tracker` section (config/euroc.yaml)")
       ->check(CLI::ExistingFile);
   app.add_option("--set", a.overrides, "Override one option, e.g. --set tracker.max_features=150");
   app.add_option("--frames", a.frames, "Stereo frames to process (0 = all)")

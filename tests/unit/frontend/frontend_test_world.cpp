@@ -69,7 +69,7 @@ const TestSequence* sequence(sim::SceneProfile profile, const std::string& prese
 }
 
 TrackerOptions tracker_options(sim::SceneProfile profile) {
-  const std::string file = profile == sim::SceneProfile::kIndoor ? "edge_indoor.yaml" : "edge_outdoor.yaml";
+  const std::string file = profile == sim::SceneProfile::kIndoor ? "euroc.yaml" : "kaist.yaml";
   auto options =
       config::load_options_file<TrackerOptions>(std::filesystem::path(MRVS_CONFIG_DIR) / file, "tracker");
   EXPECT_TRUE(options.ok()) << options.status();

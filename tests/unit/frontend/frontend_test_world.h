@@ -29,7 +29,7 @@ struct TestSequence {
 /// frames with the given preset ("easy" / "realistic"). Built once per argument set.
 const TestSequence* sequence(sim::SceneProfile profile, const std::string& preset, int frames);
 
-/// The tracker options of a profile: config/edge_indoor.yaml or config/edge_outdoor.yaml.
+/// The tracker options of a profile: config/euroc.yaml or config/kaist.yaml.
 TrackerOptions tracker_options(sim::SceneProfile profile);
 
 /// How run_tracker predicts the camera motion between frames.

@@ -36,7 +36,7 @@ class FrontendReplayTool : public testing::Test {
   static void TearDownTestSuite() { delete dir_; }
 
   static mrvs::test::RunResult replay(const std::filesystem::path& seq, const std::string& extra = "") {
-    const std::filesystem::path config = std::filesystem::path(MRVS_CONFIG_DIR) / "edge_indoor.yaml";
+    const std::filesystem::path config = std::filesystem::path(MRVS_CONFIG_DIR) / "euroc.yaml";
     return mrvs::test::run_tool(MRVS_FRONTEND_REPLAY, "--dataset " + quoted(seq) + " --config " +
                                                           quoted(config) + " --log-level warn " + extra);
   }

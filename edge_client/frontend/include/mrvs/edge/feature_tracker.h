@@ -15,24 +15,12 @@
 #include "mrvs/config/calibration.h"
 #include "mrvs/core/status.h"
 #include "mrvs/core/time.h"
+#include "mrvs/edge/feature_observation.h"
 #include "mrvs/edge/image_pyramid.h"
 #include "mrvs/edge/tracker_options.h"
 #include "mrvs/geometry/types.h"
 
 namespace mrvs::edge {
-
-using FeatureId = std::uint64_t;
-
-/// One feature in one stereo frame.
-struct FeatureObservation {
-  FeatureId id = 0;               ///< stable over the feature's track, unique for the tracker's life
-  Vec2d uv_left = Vec2d::Zero();  ///< raw (distorted) pixel in cam0
-  Vec2d xn_left = Vec2d::Zero();  ///< undistorted normalised coordinates in cam0
-  bool stereo = false;            ///< uv_right / xn_right valid
-  Vec2d uv_right = Vec2d::Zero();
-  Vec2d xn_right = Vec2d::Zero();
-  int track_length = 1;  ///< frames observed so far, this one included
-};
 
 /// The paper's timing columns, ms of wall time.
 struct FrontendTiming {

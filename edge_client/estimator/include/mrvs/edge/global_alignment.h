@@ -1,0 +1,60 @@
+#pragma once
+// One-time alignment of the odometry frame to the map / ground-truth frame at
+// initialisation (algorithm.md 6.2, decision 7), from a "global localisation pose":
+//   gt        the ground-truth pose at the initialisation time;
+//   gt_noisy  the same with a translation error of random direction whose length is drawn
+//             from N(mean, sd) (default: the paper's 2 cm mean);
+//   constant  a fixed T_w_o applied to the odometry frame;
+//   none      the odometry frame stays (gravity aligned, yaw and position from the start).
+// The target fixes position and heading (4 degrees of freedom); roll and pitch stay the
+// inertial estimate. Ground truth is used nowhere else.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "mrvs/config/options.h"
+#include "mrvs/core/status.h"
+#include "mrvs/edge/state.h"
+#include "mrvs/io/types.h"
+
+namespace mrvs::edge {
+
+struct AlignmentOptions : config::OptionsEquality<AlignmentOptions> {
+  std::string source = "gt_noisy";                    ///< gt | gt_noisy | constant | none
+  double translation_noise_mean_m = 0.02;             ///< gt_noisy: mean length of the error
+  double translation_noise_sd_m = 0.005;              ///< gt_noisy: its spread
+  double rotation_noise_deg = 0.0;                    ///< gt_noisy: rotation error (random axis)
+  int seed = 1;                                       ///< of the noise
+  std::vector<double> constant = {0, 0, 0, 0, 0, 0};  ///< T_w_o: x y z (m), roll pitch yaw (deg)
+
+  template <class V>
+  void visit(V& v) {
+    using namespace mrvs::config::constraints;
+    v("source", source, one_of({"gt", "gt_noisy", "constant", "none"}), "global pose at initialisation");
+    v("translation_noise_mean_m", translation_noise_mean_m, in_range(0.0, 100.0), "gt_noisy: mean error, m");
+    v("translation_noise_sd_m", translation_noise_sd_m, in_range(0.0, 100.0), "gt_noisy: error spread, m");
+    v("rotation_noise_deg", rotation_noise_deg, in_range(0.0, 180.0), "gt_noisy: rotation error, deg");
+    v("seed", seed, in_range(0, 2147483647), "seed of the noise");
+    v("constant", constant, list_size(6, 6), "constant: x y z roll pitch yaw (m, deg)");
+  }
+};
+
+/// The ground-truth pose at t_ns, interpolated (position linearly, rotation by slerp);
+/// OutOfRange when t_ns is outside the trajectory.
+StatusOr<SE3d> interpolate_trajectory(const io::Trajectory& trajectory, TimestampNs t_ns);
+
+/// The pose the state should take at its current time (IMU clock), per `options`:
+/// `groundtruth` is needed for gt / gt_noisy (FailedPrecondition naming the fix otherwise).
+/// nullopt for none.
+StatusOr<std::optional<SE3d>> alignment_target(const AlignmentOptions& options,
+                                               const io::Trajectory& groundtruth, const State& state);
+
+/// Moves the state so that the IMU takes the target's position and heading: the frame
+/// turns about gravity (z) by the yaw that best matches the target orientation, so roll and
+/// pitch stay the IMU's own (gravity keeps pointing down, and a tilt error of the target does
+/// not enter). Velocity and its covariance rotate with the frame, the position covariance
+/// becomes position_sigma^2 I (the source's accuracy); the orientation error (body frame)
+/// and the biases are unchanged. Only before the first clone.
+Status align_state(State& state, const SE3d& T_w_b, double position_sigma);
+
+}  // namespace mrvs::edge

@@ -1,0 +1,135 @@
+#pragma once
+// The edge filter behind a small facade (OpenVINS' VioManager idea): feed IMU samples and
+// the tracked features of each stereo frame; it initialises, aligns to the map frame once,
+// propagates, clones, runs the MSCKF and point updates and marginalises.
+//
+//   auto vio = VioEstimator::create(options, rig, groundtruth);
+//   vio->feed_imu(sample) ...                 // IMU up to (at least) the frame time
+//   auto out = vio->feed_frame(features);     // one stereo frame
+//   if (out->pose) write(out->t_ns, *out->pose);
+#include <deque>
+#include <optional>
+#include <string>
+
+#include "mrvs/config/options.h"
+#include "mrvs/edge/feature_database.h"
+#include "mrvs/edge/global_alignment.h"
+#include "mrvs/edge/initializer.h"
+#include "mrvs/edge/keyframe_policy.h"
+#include "mrvs/edge/msckf_updater.h"
+#include "mrvs/edge/point_updater.h"
+
+namespace mrvs::edge {
+
+struct PropagatorOptions : config::OptionsEquality<PropagatorOptions> {
+  double gravity_mps2 = 9.81;     ///< |g| (EuRoC 9.81, KAIST 9.80766)
+  double noise_multiplier = 1.0;  ///< scales the calibration's IMU noise densities
+
+  template <class V>
+  void visit(V& v) {
+    using namespace mrvs::config::constraints;
+    v("gravity_mps2", gravity_mps2, in_range(9.0, 10.5), "gravity magnitude, m/s^2");
+    v("noise_multiplier", noise_multiplier, in_range(0.01, 1000.0), "scale of the calibration's IMU noise");
+  }
+};
+
+struct EstimatorOptions : config::OptionsEquality<EstimatorOptions> {
+  PropagatorOptions propagator;
+  StateOptions state;
+  TriangulationOptions triangulation;
+  MsckfOptions msckf;
+  PointOptions points;
+  KeyframeOptions keyframe;
+  InitializerOptions initializer;
+  AlignmentOptions alignment;
+
+  template <class V>
+  void visit(V& v) {
+    v.section("propagator", propagator, "IMU propagation");
+    v.section("state", state, "state layout");
+    v.section("triangulation", triangulation, "feature triangulation");
+    v.section("msckf", msckf, "MSCKF update");
+    v.section("points", points, "point features in the state");
+    v.section("keyframe", keyframe, "clone marginalisation");
+    v.section("initializer", initializer, "initialisation");
+    v.section("alignment", alignment, "one-time alignment to the map frame");
+  }
+};
+
+/// Wall time of the estimator's steps for one frame, ms.
+struct EstimatorTiming {
+  double propagate_ms = 0.0;  ///< propagation and cloning
+  double msckf_ms = 0.0;      ///< MSCKF update (the paper's state update without map points)
+  double points_ms = 0.0;     ///< point update, initialisation, removal
+  double marginalize_ms = 0.0;
+  double total_ms = 0.0;
+};
+
+struct FrameOutput {
+  TimestampNs t_ns = 0;  ///< camera time of the frame
+  bool initialized = false;
+  std::optional<SE3d> T_w_b;  ///< IMU pose at the frame (IMU clock t_ns + t_d), map frame
+  TimestampNs t_imu_ns = 0;
+  std::string status;  ///< why it waits, or what went wrong this frame
+  MsckfStats msckf;
+  PointStats points;
+  int clones = 0;
+  int slam_points = 0;
+  EstimatorTiming timing;
+};
+
+class VioEstimator {
+ public:
+  /// `groundtruth` feeds the alignment source (may be empty for source none / constant).
+  static StatusOr<VioEstimator> create(const EstimatorOptions& options,
+                                       const config::StereoRigCalibration& rig,
+                                       io::Trajectory groundtruth = {});
+
+  /// IMU samples in time order (InvalidArgument for a sample not after the previous one).
+  Status feed_imu(const io::ImuSample& sample);
+  /// One frame of tracked features. OutOfRange when the IMU does not cover the frame yet
+  /// (feed more IMU and call again) or has a gap (skip the frame); other errors are the
+  /// filter's (the frame is skipped, the state kept).
+  StatusOr<FrameOutput> feed_frame(const FeatureFrame& frame);
+
+  /// The motion of cam0 from the previous frame to a frame at `t_cam_ns` predicted by the
+  /// IMU (for the tracker's KLT prior); nullopt before initialisation or without IMU.
+  std::optional<SE3d> predict_T_c_cprev(TimestampNs t_cam_ns) const;
+
+  bool initialized() const { return state_.has_value(); }
+  const State* state() const { return state_ ? &*state_ : nullptr; }
+  const EstimatorOptions& options() const { return options_; }
+  /// Why the initialisation still waits (empty once initialised).
+  const std::string& waiting_reason() const { return waiting_; }
+  /// Initialisation method and detail line once initialised.
+  const std::string& initialization_summary() const { return init_summary_; }
+
+ private:
+  VioEstimator(const EstimatorOptions& options, const config::StereoRigCalibration& rig,
+               io::Trajectory groundtruth);
+  StatusOr<FrameOutput> initialize(const FeatureFrame& frame);
+  Status start(const InitializationResult& init, const FeatureFrame& frame);
+  StatusOr<FrameOutput> track(const FeatureFrame& frame);
+  void update(const FeatureFrame& frame, FrameOutput* out);
+  void marginalize(TimestampNs marg_ns, FrameOutput* out);
+  std::vector<io::ImuSample> imu_vector() const;
+
+  EstimatorOptions options_;
+  config::StereoRigCalibration rig_;
+  io::Trajectory groundtruth_;
+  ImuNoise noise_;
+  Vec3d g_w_;
+  Initializer initializer_;
+  MsckfUpdater msckf_;
+  PointUpdater points_;
+  std::optional<State> state_;
+  ImuState imu_fej_;  ///< first estimate of the IMU at the newest clone (before its update)
+  FeatureDatabase db_;
+  std::deque<io::ImuSample> imu_;
+  TimestampNs init_ns_ = 0;
+  Vec3d last_w_b_ = Vec3d::Zero();
+  std::string waiting_;
+  std::string init_summary_;
+};
+
+}  // namespace mrvs::edge

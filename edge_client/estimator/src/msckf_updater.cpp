@@ -1,0 +1,71 @@
+#include "mrvs/edge/msckf_updater.h"
+
+#include <algorithm>
+
+#include "mrvs/edge/feature_measurement.h"
+
+namespace mrvs::edge {
+
+MsckfUpdater::MsckfUpdater(const MsckfOptions& options, const TriangulationOptions& triangulation)
+    : options_(options), triangulation_(triangulation), chi2_(500) {}
+
+std::optional<Measurement> MsckfUpdater::feature_measurement(const State& state, const FeatureTrack& track,
+                                                             MsckfStats* stats) const {
+  const std::vector<BearingObservation> bearings = clone_bearings(state, track);
+  if (static_cast<int>(bearings.size()) < options_.min_observations) {
+    ++stats->too_few_observations;
+    return std::nullopt;
+  }
+  const StatusOr<Vec3d> p_w = triangulate(bearings, triangulation_);
+  if (!p_w.ok()) {
+    ++stats->triangulation_failed;
+    return std::nullopt;
+  }
+  const StatusOr<FeatureRows> rows = feature_rows(state, track, *p_w, *p_w, options_.sigma_px);
+  if (!rows.ok() || rows->m.rows() <= 3) {
+    ++stats->triangulation_failed;
+    return std::nullopt;
+  }
+  StatusOr<SplitMeasurement> split = split_by_new_variable(rows->m, rows->H_f);
+  if (!split.ok()) {
+    ++stats->triangulation_failed;
+    return std::nullopt;
+  }
+  Measurement& m = split->rest;
+  if (mahalanobis(state, m) > options_.chi2_multiplier * chi2_.q95(m.rows())) {
+    ++stats->gated;
+    return std::nullopt;
+  }
+  return std::move(m);
+}
+
+MsckfStats MsckfUpdater::update(State& state, const FeatureDatabase& db,
+                                const std::vector<FeatureId>& ids) const {
+  MsckfStats stats;
+  // The most observed features first, at most max_features.
+  std::vector<const FeatureTrack*> tracks;
+  for (FeatureId id : ids) {
+    if (const FeatureTrack* t = db.find(id)) tracks.push_back(t);
+  }
+  std::stable_sort(tracks.begin(), tracks.end(), [](const FeatureTrack* a, const FeatureTrack* b) {
+    return a->obs.size() > b->obs.size();
+  });
+  if (static_cast<int>(tracks.size()) > options_.max_features)
+    tracks.resize(static_cast<std::size_t>(options_.max_features));
+  stats.candidates = static_cast<int>(tracks.size());
+  std::vector<Measurement> parts;
+  for (const FeatureTrack* t : tracks) {
+    std::optional<Measurement> m = feature_measurement(state, *t, &stats);
+    if (!m) continue;
+    stats.rows += m->rows();
+    parts.push_back(std::move(*m));
+  }
+  stats.used = static_cast<int>(parts.size());
+  if (parts.empty()) return stats;
+  Measurement all = stack(parts);
+  compress(&all);
+  stats.status = ekf_update(state, all);
+  return stats;
+}
+
+}  // namespace mrvs::edge

@@ -1,0 +1,218 @@
+#include "mrvs/edge/vio_estimator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <set>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+namespace mrvs::edge {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+ImuNoise scaled_noise(const config::ImuCalibration& imu, double k) {
+  return {k * imu.gyroscope_noise_density, k * imu.accelerometer_noise_density, k * imu.gyroscope_random_walk,
+          k * imu.accelerometer_random_walk};
+}
+
+}  // namespace
+
+VioEstimator::VioEstimator(const EstimatorOptions& options, const config::StereoRigCalibration& rig,
+                           io::Trajectory groundtruth)
+    : options_(options),
+      rig_(rig),
+      groundtruth_(std::move(groundtruth)),
+      noise_(scaled_noise(rig.imu, options.propagator.noise_multiplier)),
+      g_w_(0.0, 0.0, -options.propagator.gravity_mps2),
+      initializer_(options.initializer, rig, noise_, options.propagator.gravity_mps2),
+      msckf_(options.msckf, options.triangulation),
+      points_(options.points, options.triangulation) {}
+
+StatusOr<VioEstimator> VioEstimator::create(const EstimatorOptions& options,
+                                            const config::StereoRigCalibration& rig,
+                                            io::Trajectory groundtruth) {
+  MRVS_RETURN_IF_ERROR(config::validate_options(options));
+  for (std::size_t c = 0; c < 2; ++c) {
+    if (!rig.cameras[c].model) {
+      return absl::InvalidArgumentError(fmt::format("estimator: camera {} has no model (calibration)", c));
+    }
+  }
+  if (!(rig.imu.gyroscope_noise_density > 0.0 && rig.imu.accelerometer_noise_density > 0.0)) {
+    return absl::InvalidArgumentError(
+        "estimator: the IMU calibration has no noise densities (imu0/sensor.yaml gyroscope_noise_density, "
+        "accelerometer_noise_density)");
+  }
+  return VioEstimator(options, rig, std::move(groundtruth));
+}
+
+Status VioEstimator::feed_imu(const io::ImuSample& s) {
+  if (!imu_.empty() && s.t_ns <= imu_.back().t_ns) {
+    return absl::InvalidArgumentError(
+        fmt::format("IMU sample at {} ns is not after the previous one ({} ns)", s.t_ns, imu_.back().t_ns));
+  }
+  imu_.push_back(s);
+  if (!state_) initializer_.feed_imu(s);
+  // Keep what the next propagation needs: from just before the state time.
+  const TimestampNs keep_from =
+      state_ ? state_->imu.t_ns : s.t_ns - from_seconds(options_.initializer.window_s + 1.0);
+  while (imu_.size() > 2 && imu_[1].t_ns <= keep_from) imu_.pop_front();
+  return absl::OkStatus();
+}
+
+std::vector<io::ImuSample> VioEstimator::imu_vector() const { return {imu_.begin(), imu_.end()}; }
+
+std::optional<SE3d> VioEstimator::predict_T_c_cprev(TimestampNs t_cam_ns) const {
+  if (!state_ || state_->clones.empty()) return std::nullopt;
+  const TimestampNs t_imu = t_cam_ns + from_seconds(state_->time_offset_s);
+  const auto prop = propagate(state_->imu, imu_vector(), t_imu, g_w_, noise_);
+  if (!prop.ok()) return std::nullopt;
+  const SE3d& T_b_c = state_->cams[0].T_b_c;
+  const SE3d T_w_c_now = SE3d(prop->state.q_w_b, prop->state.p_w_b) * T_b_c;
+  const SE3d T_w_c_prev = state_->T_w_c(state_->newest_clone_ns(), 0);
+  return T_w_c_now.inverse() * T_w_c_prev;
+}
+
+StatusOr<FrameOutput> VioEstimator::feed_frame(const FeatureFrame& frame) {
+  if (!imu_.empty() && imu_.back().t_ns < frame.t_ns + rig_.cameras[0].time_offset_ns) {
+    return absl::OutOfRangeError(
+        fmt::format("IMU data ends at {} ns, before the frame at {} ns", imu_.back().t_ns, frame.t_ns));
+  }
+  if (state_ && frame.t_ns <= state_->newest_clone_ns()) {
+    return absl::InvalidArgumentError(fmt::format("frame at {} ns is not after the previous one ({} ns)",
+                                                  frame.t_ns, state_->newest_clone_ns()));
+  }
+  return state_ ? track(frame) : initialize(frame);
+}
+
+StatusOr<FrameOutput> VioEstimator::initialize(const FeatureFrame& frame) {
+  FrameOutput out;
+  out.t_ns = frame.t_ns;
+  initializer_.feed_frame(frame);
+  std::optional<InitializationResult> init = initializer_.try_initialize(&waiting_);
+  out.status = waiting_;
+  if (!init) return out;
+  MRVS_RETURN_IF_ERROR(start(*init, frame));
+  out.initialized = true;
+  out.T_w_b = SE3d(state_->imu.q_w_b, state_->imu.p_w_b);
+  out.t_imu_ns = state_->imu.t_ns;
+  out.clones = 1;
+  out.status = init_summary_;
+  return out;
+}
+
+Status VioEstimator::start(const InitializationResult& init, const FeatureFrame& frame) {
+  State state(options_.state, rig_);
+  state.imu = init.imu;
+  state.P.topLeftCorner<15, 15>() = init.P;
+  MRVS_ASSIGN_OR_RETURN(const std::optional<SE3d> target,
+                        alignment_target(options_.alignment, groundtruth_, state));
+  if (target) {
+    const double sigma = options_.alignment.source == "gt"
+                             ? 1e-3
+                             : std::max(1e-3, options_.alignment.translation_noise_mean_m);
+    MRVS_RETURN_IF_ERROR(align_state(state, *target, sigma));
+  }
+  // The body rate at the start (for the clone's time-offset Jacobian).
+  const auto rates = propagate(state.imu, imu_vector(), state.imu.t_ns, g_w_, noise_);
+  last_w_b_ = rates.ok() ? rates->last_rates.w : Vec3d::Zero();
+  MRVS_RETURN_IF_ERROR(augment_clone(state, frame.t_ns, last_w_b_));
+  imu_fej_ = state.imu;
+  state_ = std::move(state);
+  db_ = FeatureDatabase();
+  db_.add(frame);
+  init_ns_ = frame.t_ns;
+  init_summary_ = fmt::format("initialised ({}) at {} ns: {}; alignment {}", init.method, frame.t_ns,
+                              init.detail, options_.alignment.source);
+  waiting_.clear();
+  return absl::OkStatus();
+}
+
+StatusOr<FrameOutput> VioEstimator::track(const FeatureFrame& frame) {
+  FrameOutput out;
+  out.t_ns = frame.t_ns;
+  out.initialized = true;
+  const Clock::time_point t0 = Clock::now();
+  const TimestampNs t_imu = frame.t_ns + from_seconds(state_->time_offset_s);
+  MRVS_ASSIGN_OR_RETURN(Propagation prop, propagate(state_->imu, imu_vector(), t_imu, g_w_, noise_));
+  if (options_.state.use_fej) apply_first_estimates(imu_fej_, prop.state, g_w_, &prop.Phi);
+  imu_fej_ = prop.state;  // the estimate this frame's measurements are linearised at
+  // Covariance: IMU block by Phi, cross terms with every other variable, noise.
+  const int n = state_->dim();
+  Eigen::MatrixXd& P = state_->P;
+  const Eigen::MatrixXd P_io = P.block(0, 15, 15, n - 15);
+  P.block(0, 15, 15, n - 15) = prop.Phi * P_io;
+  P.block(15, 0, n - 15, 15) = P.block(0, 15, 15, n - 15).transpose();
+  P.topLeftCorner<15, 15>() = prop.Phi * P.topLeftCorner<15, 15>() * prop.Phi.transpose() + prop.Qd;
+  state_->imu = prop.state;
+  last_w_b_ = prop.last_rates.w;
+  MRVS_RETURN_IF_ERROR(augment_clone(*state_, frame.t_ns, last_w_b_));
+  db_.add(frame);
+  out.timing.propagate_ms = ms_since(t0);
+  update(frame, &out);
+  out.T_w_b = SE3d(state_->imu.q_w_b, state_->imu.p_w_b);
+  out.t_imu_ns = state_->imu.t_ns;
+  out.clones = static_cast<int>(state_->clones.size());
+  out.slam_points = static_cast<int>(state_->points.size());
+  out.timing.total_ms = ms_since(t0);
+  spdlog::debug(
+      "frame {}: msckf {} used / {} gated / {} untriangulated, points {} updated / {} gated / {} new / {} "
+      "removed, {} in the state, {:.2f} ms",
+      frame.t_ns, out.msckf.used, out.msckf.gated, out.msckf.triangulation_failed, out.points.updated,
+      out.points.gated, out.points.initialized, out.points.removed, out.slam_points, out.timing.total_ms);
+  return out;
+}
+
+void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
+  State& s = *state_;
+  const bool full = static_cast<int>(s.clones.size()) > options_.state.max_clones;
+  const TimestampNs marg_ns = full ? clone_to_marginalize(s, db_, options_.keyframe) : 0;
+  const bool marg_oldest = full && marg_ns == s.clones.begin()->first;
+  // MSCKF features: tracks that ended, and (when the oldest clone goes) those it saw; long
+  // ones of the latter still tracked become points when there is room.
+  std::vector<FeatureId> msckf_ids, point_ids;
+  for (FeatureId id : db_.lost_before(frame.t_ns)) {
+    if (s.points.count(id) == 0) msckf_ids.push_back(id);
+  }
+  if (marg_oldest) {
+    const bool points_allowed = to_seconds(frame.t_ns - init_ns_) >= options_.points.delay_s;
+    for (FeatureId id : db_.seen_at(marg_ns)) {
+      const FeatureTrack* t = db_.find(id);
+      if (s.points.count(id) != 0 || !t->seen_at(frame.t_ns)) continue;
+      const bool long_track = t->frames() >= options_.state.max_clones;
+      (long_track && points_allowed ? point_ids : msckf_ids).push_back(id);
+    }
+  }
+  Clock::time_point t0 = Clock::now();
+  out->msckf = msckf_.update(s, db_, msckf_ids);
+  out->timing.msckf_ms = ms_since(t0);
+  t0 = Clock::now();
+  out->points = points_.update(s, db_, frame.t_ns);
+  const PointStats init = points_.initialize(s, db_, point_ids, frame.t_ns);
+  out->points.initialized = init.initialized;
+  out->points.init_failed = init.init_failed;
+  out->points.removed = points_.remove_stale(s, db_, frame.t_ns);
+  // Points keep only their newest observations; used MSCKF features leave the database.
+  for (const auto& [id, p] : s.points) db_.keep_from(id, frame.t_ns);
+  for (FeatureId id : msckf_ids) db_.erase(id);
+  for (FeatureId id : point_ids) {
+    if (s.points.count(id) == 0) db_.erase(id);  // failed to initialise: used up as MSCKF would be
+  }
+  out->timing.points_ms = ms_since(t0);
+  if (full) marginalize(marg_ns, out);
+}
+
+void VioEstimator::marginalize(TimestampNs marg_ns, FrameOutput* out) {
+  const Clock::time_point t0 = Clock::now();
+  marginalize_clone(*state_, marg_ns);
+  db_.erase_at(marg_ns);
+  db_.erase_before(state_->clones.begin()->first);
+  out->timing.marginalize_ms = ms_since(t0);
+}
+
+}  // namespace mrvs::edge

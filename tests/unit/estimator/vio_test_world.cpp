@@ -1,0 +1,161 @@
+#include "vio_test_world.h"
+
+#include <map>
+#include <random>
+#include <tuple>
+
+#include <gtest/gtest.h>
+
+#include "mrvs/config/options.h"
+#include "mrvs/eval/trajectory_eval.h"
+#include "mrvs/io/trajectory_io.h"
+#include "mrvs/test/shared_data.h"
+
+namespace mrvs::edge::test {
+namespace {
+
+struct Landmarks {
+  std::vector<Vec3d> p_w;
+};
+
+/// Every observation of landmark j at frame k, or nullopt when not seen in cam0.
+std::optional<FeatureObservation> observe(const sim::World& w, std::size_t k, const Vec3d& p_w, double noise,
+                                          std::mt19937_64* rng) {
+  std::normal_distribution<double> n(0.0, noise);
+  FeatureObservation o;
+  for (int c = 0; c < 2; ++c) {
+    const auto& cam = w.calibration.cameras[static_cast<std::size_t>(c)];
+    const SE3d T_c_w = (w.frame_pose(k) * cam.T_b_c).inverse();
+    const auto uv = cam.model->project(T_c_w * p_w, nullptr, 0.3);
+    if (!uv || !cam.model->in_image(*uv, 10.0)) {
+      if (c == 0) return std::nullopt;
+      continue;
+    }
+    const Vec2d noisy = *uv + Vec2d(n(*rng), n(*rng));
+    const auto xn = cam.model->undistort(noisy);
+    if (!xn.ok()) {
+      if (c == 0) return std::nullopt;
+      continue;
+    }
+    if (c == 0) {
+      o.uv_left = noisy, o.xn_left = *xn;
+    } else {
+      o.stereo = true, o.uv_right = noisy, o.xn_right = *xn;
+    }
+  }
+  return o;
+}
+
+/// Frames with at most max_features tracks: alive tracks go on, new ones fill up (spread by
+/// a random order of the landmarks).
+std::vector<FeatureFrame> make_frames(const sim::World& w, const Landmarks& lm, const SyntheticOptions& o) {
+  std::mt19937_64 rng(static_cast<std::uint64_t>(o.seed));
+  std::vector<std::size_t> order(lm.p_w.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::shuffle(order.begin(), order.end(), rng);
+  std::map<std::size_t, FeatureId> alive;  // landmark -> track id
+  FeatureId next_id = 1;
+  std::vector<FeatureFrame> frames;
+  for (std::size_t k = 0; k < w.grid.camera_stamp_ns.size(); ++k) {
+    FeatureFrame f;
+    f.t_ns = w.grid.camera_stamp_ns[k];
+    std::map<std::size_t, FeatureId> now;
+    for (const auto& [j, id] : alive) {
+      auto obs = observe(w, k, lm.p_w[j], o.pixel_noise, &rng);
+      if (!obs) continue;
+      obs->id = id;
+      f.features.push_back(*obs);
+      now[j] = id;
+    }
+    for (std::size_t j : order) {
+      if (static_cast<int>(f.features.size()) >= o.max_features) break;
+      if (now.count(j) != 0) continue;
+      auto obs = observe(w, k, lm.p_w[j], o.pixel_noise, &rng);
+      if (!obs) continue;
+      obs->id = next_id++;
+      f.features.push_back(*obs);
+      now[j] = obs->id;
+    }
+    alive = std::move(now);
+    frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
+std::unique_ptr<SyntheticSequence> build(const SyntheticOptions& o) {
+  sim::GeneratorRequest r;
+  r.trajectory = mrvs::test::euroc_groundtruth_file(o.trajectory);
+  r.preset = o.preset;
+  r.options = sim::default_options(sim::SceneProfile::kIndoor);
+  EXPECT_TRUE(sim::apply_preset(o.preset, r.options).ok());
+  r.options.trajectory.window_start_s = o.start_s;
+  r.options.trajectory.window_duration_s = o.duration_s;
+  r.options.map.spacing_near_m = r.options.map.spacing_far_m = 0.1;
+  auto world = sim::build_world(r);
+  EXPECT_TRUE(world.ok()) << world.status();
+  if (!world.ok()) return nullptr;
+  auto seq = std::make_unique<SyntheticSequence>();
+  seq->world = std::move(*world);
+  Landmarks lm;
+  for (const auto& p : seq->world.map.clean_points) lm.p_w.push_back(p.position.cast<double>());
+  seq->frames = make_frames(seq->world, lm, o);
+  for (const auto& s : seq->world.imu) seq->imu.push_back(s.measured);
+  seq->groundtruth = io::to_trajectory(seq->world.states);
+  return seq;
+}
+
+}  // namespace
+
+const SyntheticSequence* synthetic_sequence(const SyntheticOptions& o) {
+  static std::map<std::tuple<std::string, double, double, std::string, double, int, int>,
+                  std::unique_ptr<SyntheticSequence>>
+      cache;
+  const auto key =
+      std::make_tuple(o.trajectory, o.start_s, o.duration_s, o.preset, o.pixel_noise, o.max_features, o.seed);
+  auto it = cache.find(key);
+  if (it == cache.end()) it = cache.emplace(key, build(o)).first;
+  return it->second.get();
+}
+
+EstimatorOptions euroc_estimator_options() {
+  auto o = config::load_options_file<EstimatorOptions>(std::filesystem::path(MRVS_CONFIG_DIR) / "euroc.yaml",
+                                                       "estimator");
+  EXPECT_TRUE(o.ok()) << o.status();
+  return o.ok() ? *o : EstimatorOptions{};
+}
+
+io::Trajectory run_estimator(const SyntheticSequence& seq, const EstimatorOptions& options, int* skipped) {
+  io::Trajectory out;
+  auto vio = VioEstimator::create(options, seq.world.calibration, seq.groundtruth);
+  EXPECT_TRUE(vio.ok()) << vio.status();
+  if (!vio.ok()) return out;
+  std::size_t next = 0;
+  int skip = 0;
+  for (const FeatureFrame& f : seq.frames) {
+    while (next < seq.imu.size()) {
+      EXPECT_TRUE(vio->feed_imu(seq.imu[next]).ok());
+      if (seq.imu[next++].t_ns >= f.t_ns) break;
+    }
+    auto r = vio->feed_frame(f);
+    if (!r.ok()) {
+      ++skip;
+      continue;
+    }
+    if (r->T_w_b) out.push_back({r->t_imu_ns, *r->T_w_b});
+  }
+  if (skipped != nullptr) *skipped = skip;
+  return out;
+}
+
+double ate_rmse(const SyntheticSequence& seq, const io::Trajectory& estimate, bool se3_aligned) {
+  auto assoc = eval::associate(estimate, seq.groundtruth, eval::AssociationOptions{});
+  if (!assoc.ok()) return 1e9;
+  eval::Alignment identity;
+  auto alignment =
+      se3_aligned ? eval::align(*assoc, eval::AlignmentMethod::kSE3) : StatusOr<eval::Alignment>(identity);
+  if (!alignment.ok()) return 1e9;
+  auto ate = eval::compute_ate(*assoc, *alignment);
+  return ate.ok() ? ate->position_m.rmse : 1e9;
+}
+
+}  // namespace mrvs::edge::test

@@ -1,0 +1,46 @@
+#pragma once
+// Estimator tests on generated data without images: the simulator's trajectory, IMU and
+// scene points; features are the scene points projected into both cameras with the true
+// poses plus pixel noise (no tracking errors), so the filter alone is under test.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "mrvs/edge/feature_observation.h"
+#include "mrvs/edge/vio_estimator.h"
+#include "mrvs/sim/generator.h"
+
+namespace mrvs::edge::test {
+
+struct SyntheticSequence {
+  sim::World world;
+  std::vector<FeatureFrame> frames;
+  std::vector<io::ImuSample> imu;  ///< noisy, as written to imu0/data.csv
+  io::Trajectory groundtruth;      ///< IMU poses at every IMU stamp
+};
+
+struct SyntheticOptions {
+  std::string trajectory = "V1_01_easy.txt";  ///< in ../shared/data/euroc_groundtruth
+  double start_s = 0.0;                       ///< window start (0: the static beginning)
+  double duration_s = 20.0;
+  std::string preset = "easy";
+  double pixel_noise = 0.5;  ///< px, per observation
+  int max_features = 200;
+  int seed = 3;
+};
+
+/// Built once per option set within a test binary.
+const SyntheticSequence* synthetic_sequence(const SyntheticOptions& options);
+
+/// The estimator options of config/euroc.yaml.
+EstimatorOptions euroc_estimator_options();
+
+/// Runs the estimator over the sequence; the IMU poses it returned (map frame).
+io::Trajectory run_estimator(const SyntheticSequence& seq, const EstimatorOptions& options,
+                             int* skipped = nullptr);
+
+/// ATE RMSE (m) of `estimate` against the sequence's ground truth: SE(3)-aligned, or not
+/// aligned at all.
+double ate_rmse(const SyntheticSequence& seq, const io::Trajectory& estimate, bool se3_aligned);
+
+}  // namespace mrvs::edge::test
