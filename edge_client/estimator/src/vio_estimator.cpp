@@ -133,12 +133,40 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
   return absl::OkStatus();
 }
 
+std::optional<std::string> VioEstimator::imu_gap(TimestampNs from_ns, TimestampNs to_ns) const {
+  const DurationNs max_gap = from_seconds(options_.propagator.max_imu_gap_s);
+  for (std::size_t i = 1; i < imu_.size(); ++i) {
+    if (imu_[i].t_ns <= from_ns || imu_[i - 1].t_ns >= to_ns) continue;
+    if (imu_[i].t_ns - imu_[i - 1].t_ns > max_gap) {
+      return fmt::format("IMU gap of {:.3f} s between {} and {} ns",
+                         to_seconds(imu_[i].t_ns - imu_[i - 1].t_ns), imu_[i - 1].t_ns, imu_[i].t_ns);
+    }
+  }
+  return std::nullopt;
+}
+
+void VioEstimator::restart() {
+  state_.reset();
+  db_ = FeatureDatabase();
+  initializer_ = Initializer(options_.initializer, rig_, noise_, options_.propagator.gravity_mps2);
+  // The initialiser starts from the IMU after the gap.
+  for (const io::ImuSample& s : imu_) initializer_.feed_imu(s);
+}
+
 StatusOr<FrameOutput> VioEstimator::track(const FeatureFrame& frame) {
   FrameOutput out;
   out.t_ns = frame.t_ns;
   out.initialized = true;
   const Clock::time_point t0 = Clock::now();
   const TimestampNs t_imu = frame.t_ns + from_seconds(state_->time_offset_s);
+  if (const auto gap = imu_gap(state_->imu.t_ns, t_imu)) {
+    // Drop the samples before the gap: the next initialisation uses what follows it.
+    const DurationNs max_gap = from_seconds(options_.propagator.max_imu_gap_s);
+    while (imu_.size() > 1 && imu_[1].t_ns - imu_[0].t_ns <= max_gap) imu_.pop_front();
+    if (!imu_.empty()) imu_.pop_front();
+    restart();
+    return absl::DataLossError(*gap + "; the filter restarts and initialises again");
+  }
   MRVS_ASSIGN_OR_RETURN(Propagation prop, propagate(state_->imu, imu_vector(), t_imu, g_w_, noise_));
   if (options_.state.use_fej) apply_first_estimates(imu_fej_, prop.state, g_w_, &prop.Phi);
   imu_fej_ = prop.state;  // the estimate this frame's measurements are linearised at

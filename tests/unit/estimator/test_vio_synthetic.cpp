@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "mrvs/geometry/quaternion.h"
+#include "mrvs/geometry/so3.h"
 #include "vio_test_world.h"
 
 namespace mrvs::edge {
@@ -92,6 +93,51 @@ TEST(VioSynthetic, StaticInitialisationRecoversGravityAndGyroBiasAndDoesNotDrift
     }
   }
   ASSERT_TRUE(first.has_value()) << vio->waiting_reason();
+}
+
+TEST(VioSynthetic, OnlineCalibrationMovesTowardsTheTruth) {
+  const test::SyntheticSequence* seq = test::synthetic_sequence(twenty_seconds());
+  ASSERT_NE(seq, nullptr);
+  const config::StereoRigCalibration& truth = seq->world.calibration;
+  config::StereoRigCalibration wrong = truth;
+  auto& cam0 = wrong.cameras[0];
+  cam0.T_b_c = SE3d(cam0.T_b_c.quaternion() * so3::exp_quat<double>(Vec3d(0.5, -0.3, 0.4) * M_PI / 180.0),
+                    cam0.T_b_c.translation() + Vec3d(0.01, -0.005, 0.005));
+  camera::Params p = cam0.model->params();
+  p[0] += 3.0, p[2] -= 2.0;  // fx, cx
+  cam0.model = std::shared_ptr<const camera::CameraModel>(
+      std::move(*camera::make_camera(cam0.model->model(), cam0.model->width(), cam0.model->height(), p)));
+  for (auto& c : wrong.cameras) c.time_offset_ns = 4'000'000;  // the truth is 0
+  EstimatorOptions o = test::euroc_estimator_options();
+  o.state.calib_extrinsics = o.state.calib_intrinsics = o.state.calib_time_offset = true;
+  auto vio = VioEstimator::create(o, wrong, seq->groundtruth);
+  ASSERT_TRUE(vio.ok()) << vio.status();
+  std::size_t next = 0;
+  for (const FeatureFrame& f : seq->frames) {
+    while (next < seq->imu.size()) {
+      ASSERT_TRUE(vio->feed_imu(seq->imu[next]).ok());
+      if (seq->imu[next++].t_ns >= f.t_ns + 4'000'000) break;
+    }
+    ASSERT_TRUE(vio->feed_frame(f).ok());
+  }
+  ASSERT_TRUE(vio->initialized());
+  const State& s = *vio->state();
+  const auto rot_err = [&](const SE3d& a) {
+    return so3::log<double>(a.quaternion().conjugate() * truth.cameras[0].T_b_c.quaternion()).norm() * 180.0 /
+           M_PI;
+  };
+  const auto pos_err = [&](const SE3d& a) {
+    return (a.translation() - truth.cameras[0].T_b_c.translation()).norm();
+  };
+  testing::Test::RecordProperty("extrinsic_rot_err_deg", num(rot_err(s.cams[0].T_b_c)));
+  testing::Test::RecordProperty("extrinsic_pos_err_m", num(pos_err(s.cams[0].T_b_c)));
+  testing::Test::RecordProperty("fx_err_px", num(s.cams[0].model->fx() - truth.cameras[0].model->fx()));
+  testing::Test::RecordProperty("time_offset_s", num(s.time_offset_s));
+  EXPECT_LT(rot_err(s.cams[0].T_b_c), 0.5 * rot_err(cam0.T_b_c));
+  EXPECT_LT(pos_err(s.cams[0].T_b_c), 0.8 * pos_err(cam0.T_b_c));  // weakly observable in 20 s
+  EXPECT_LT(std::abs(s.cams[0].model->fx() - truth.cameras[0].model->fx()), 1.5);
+  EXPECT_LT(std::abs(s.cams[0].model->cx() - truth.cameras[0].model->cx()), 1.0);
+  EXPECT_LT(std::abs(s.time_offset_s), 0.001);
 }
 
 TEST(VioSynthetic, KeyframeMarginalisationRuns) {

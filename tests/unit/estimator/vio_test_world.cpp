@@ -53,7 +53,10 @@ std::vector<FeatureFrame> make_frames(const sim::World& w, const Landmarks& lm, 
   std::vector<std::size_t> order(lm.p_w.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::shuffle(order.begin(), order.end(), rng);
-  std::map<std::size_t, FeatureId> alive;  // landmark -> track id
+  std::map<std::size_t, FeatureId> alive;    // landmark -> track id
+  std::map<FeatureId, Vec2d> offset, slide;  // per track: accumulated drift, its steady slide
+  std::normal_distribution<double> walk(0.0, 1.0);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
   FeatureId next_id = 1;
   std::vector<FeatureFrame> frames;
   for (std::size_t k = 0; k < w.grid.camera_stamp_ns.size(); ++k) {
@@ -64,6 +67,13 @@ std::vector<FeatureFrame> make_frames(const sim::World& w, const Landmarks& lm, 
       auto obs = observe(w, k, lm.p_w[j], o.pixel_noise, &rng);
       if (!obs) continue;
       obs->id = id;
+      // (Eigen vectors are not zeroed by std::map::operator[]: insert zeros explicitly.)
+      Vec2d& off = offset.try_emplace(id, Vec2d::Zero()).first->second;
+      off += o.drift_px * Vec2d(walk(rng), walk(rng)) + slide.try_emplace(id, Vec2d::Zero()).first->second;
+      obs->uv_left += off;
+      const auto xn = w.calibration.cameras[0].model->undistort(obs->uv_left);
+      if (!xn.ok()) continue;
+      obs->xn_left = *xn;
       f.features.push_back(*obs);
       now[j] = id;
     }
@@ -73,6 +83,10 @@ std::vector<FeatureFrame> make_frames(const sim::World& w, const Landmarks& lm, 
       auto obs = observe(w, k, lm.p_w[j], o.pixel_noise, &rng);
       if (!obs) continue;
       obs->id = next_id++;
+      if (u01(rng) < o.sliding_fraction) {
+        const double a = 2.0 * M_PI * u01(rng);
+        slide[obs->id] = o.sliding_px * Vec2d(std::cos(a), std::sin(a));
+      }
       f.features.push_back(*obs);
       now[j] = obs->id;
     }
@@ -107,11 +121,12 @@ std::unique_ptr<SyntheticSequence> build(const SyntheticOptions& o) {
 }  // namespace
 
 const SyntheticSequence* synthetic_sequence(const SyntheticOptions& o) {
-  static std::map<std::tuple<std::string, double, double, std::string, double, int, int>,
-                  std::unique_ptr<SyntheticSequence>>
+  static std::map<
+      std::tuple<std::string, double, double, std::string, double, int, int, double, double, double>,
+      std::unique_ptr<SyntheticSequence>>
       cache;
-  const auto key =
-      std::make_tuple(o.trajectory, o.start_s, o.duration_s, o.preset, o.pixel_noise, o.max_features, o.seed);
+  const auto key = std::make_tuple(o.trajectory, o.start_s, o.duration_s, o.preset, o.pixel_noise,
+                                   o.max_features, o.seed, o.drift_px, o.sliding_fraction, o.sliding_px);
   auto it = cache.find(key);
   if (it == cache.end()) it = cache.emplace(key, build(o)).first;
   return it->second.get();

@@ -27,6 +27,9 @@ struct SyntheticOptions {
   double pixel_noise = 0.5;  ///< px, per observation
   int max_features = 200;
   int seed = 3;
+  double drift_px = 0.0;          ///< per frame random walk of each track's left pixel (KLT drift)
+  double sliding_fraction = 0.0;  ///< tracks whose left pixel slides steadily (bad tracks)
+  double sliding_px = 0.2;        ///< their slide per frame, px
 };
 
 /// Built once per option set within a test binary.

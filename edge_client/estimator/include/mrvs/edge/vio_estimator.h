@@ -24,12 +24,14 @@ namespace mrvs::edge {
 struct PropagatorOptions : config::OptionsEquality<PropagatorOptions> {
   double gravity_mps2 = 9.81;     ///< |g| (EuRoC 9.81, KAIST 9.80766)
   double noise_multiplier = 1.0;  ///< scales the calibration's IMU noise densities
+  double max_imu_gap_s = 0.05;    ///< a longer gap between IMU samples restarts the filter
 
   template <class V>
   void visit(V& v) {
     using namespace mrvs::config::constraints;
     v("gravity_mps2", gravity_mps2, in_range(9.0, 10.5), "gravity magnitude, m/s^2");
     v("noise_multiplier", noise_multiplier, in_range(0.01, 1000.0), "scale of the calibration's IMU noise");
+    v("max_imu_gap_s", max_imu_gap_s, in_range(0.001, 10.0), "longest IMU gap propagated over, s");
   }
 };
 
@@ -88,8 +90,10 @@ class VioEstimator {
   /// IMU samples in time order (InvalidArgument for a sample not after the previous one).
   Status feed_imu(const io::ImuSample& sample);
   /// One frame of tracked features. OutOfRange when the IMU does not cover the frame yet
-  /// (feed more IMU and call again) or has a gap (skip the frame); other errors are the
-  /// filter's (the frame is skipped, the state kept).
+  /// (feed more IMU and call again); DataLoss when the IMU has a gap longer than
+  /// propagator.max_imu_gap_s before it (the filter restarts: it initialises again from the
+  /// data after the gap); other errors are the filter's (the frame is skipped, the state
+  /// kept).
   StatusOr<FrameOutput> feed_frame(const FeatureFrame& frame);
 
   /// The motion of cam0 from the previous frame to a frame at `t_cam_ns` predicted by the
@@ -113,6 +117,9 @@ class VioEstimator {
   void update(const FeatureFrame& frame, FrameOutput* out);
   void marginalize(TimestampNs marg_ns, FrameOutput* out);
   std::vector<io::ImuSample> imu_vector() const;
+  /// The first gap longer than max_imu_gap_s in (from_ns, to_ns], as a message.
+  std::optional<std::string> imu_gap(TimestampNs from_ns, TimestampNs to_ns) const;
+  void restart();
 
   EstimatorOptions options_;
   config::StereoRigCalibration rig_;

@@ -1,0 +1,162 @@
+// edge_client (plain VIO, --no-map) end to end on a generated EuRoC folder: accuracy on a
+// short realistic clip, determinism, and what bad datasets give (a named error or a logged
+// skip, never a crash or a silent wrong result).
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "mrvs/eval/trajectory_eval.h"
+#include "mrvs/io/trajectory_io.h"
+#include "mrvs/test/generated_sequence.h"
+#include "mrvs/test/run_tool.h"
+#include "mrvs/test/temp_dir.h"
+
+namespace mrvs::edge {
+namespace {
+
+namespace fs = std::filesystem;
+using mrvs::test::quoted;
+using mrvs::test::value_of;
+
+/// V1_01 from its still start, 16 s, realistic preset (noise, exposure, textureless faces).
+fs::path clip() {
+  static const fs::path path = [] {
+    auto p = mrvs::test::generated_sequence(
+        "vio_v101_16s_realistic",
+        mrvs::test::indoor_sequence_request("V1_01_easy.txt", 0.0, 16.0, "realistic"));
+    EXPECT_TRUE(p.ok()) << p.status();
+    return p.ok() ? *p : fs::path();
+  }();
+  return path;
+}
+
+mrvs::test::RunResult edge_client(const fs::path& seq, const fs::path& out,
+                                  const std::string& extra = "--no-map") {
+  const fs::path config = fs::path(MRVS_CONFIG_DIR) / "euroc.yaml";
+  const std::string log = extra.find("--log-level") == std::string::npos ? " --log-level warn " : " ";
+  return mrvs::test::run_tool(MRVS_EDGE_CLIENT, "--dataset " + quoted(seq) + " --config " + quoted(config) +
+                                                    " --output " + quoted(out) + " --progress 0" + log +
+                                                    extra);
+}
+
+double ate_se3(const fs::path& estimate, const fs::path& seq) {
+  auto est = io::read_tum_trajectory(estimate);
+  auto gt = io::read_trajectory(seq / "mav0/state_groundtruth_estimate0/data.csv");
+  if (!est.ok() || !gt.ok()) return 1e9;
+  auto assoc = eval::associate(*est, *gt, eval::AssociationOptions{});
+  if (!assoc.ok()) return 1e9;
+  auto alignment = eval::align(*assoc, eval::AlignmentMethod::kSE3);
+  auto ate =
+      alignment.ok() ? eval::compute_ate(*assoc, *alignment) : StatusOr<eval::AteResult>(alignment.status());
+  return ate.ok() ? ate->position_m.rmse : 1e9;
+}
+
+/// A copy of the clip whose CSV files can be broken (images linked, not copied).
+fs::path breakable_copy(const mrvs::test::TempDir& dir) {
+  const fs::path out = dir / "seq";
+  for (const auto& e : fs::recursive_directory_iterator(clip())) {
+    const fs::path rel = fs::relative(e.path(), clip());
+    if (e.is_directory()) {
+      if (rel.filename() == "data" && rel.parent_path().filename().string().rfind("cam", 0) == 0) {
+        fs::create_directories((out / rel).parent_path());
+        fs::create_directory_symlink(e.path(), out / rel);
+      } else if (!fs::exists(out / rel)) {
+        fs::create_directories(out / rel);
+      }
+    } else if (!fs::exists(out / rel) && rel.string().find("/data/") == std::string::npos) {
+      fs::copy_file(e.path(), out / rel);
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> lines_of(const fs::path& p) {
+  std::ifstream in(p);
+  std::vector<std::string> out;
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+void write_lines(const fs::path& p, const std::vector<std::string>& lines) {
+  std::ofstream out(p);
+  for (const auto& l : lines) out << l << "\n";
+}
+
+TEST(EdgeClient, PlainVioTracksARealisticClip) {
+  ASSERT_FALSE(clip().empty());
+  const mrvs::test::TempDir dir;
+  const auto r = edge_client(clip(), dir / "traj.txt");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_GT(value_of(r.output, "POSES"), 280.0) << r.output;  // of 320 frames
+  EXPECT_EQ(value_of(r.output, "FRAMES_SKIPPED"), 0.0);
+  for (const char* key :
+       {"A_IMAGE_MS_MEDIAN", "B_TRACKING_MS_MEDIAN", "C_UPDATE_MS_MEDIAN", "FRAME_MS_P95"}) {
+    EXPECT_GT(value_of(r.output, key), 0.0) << key;
+  }
+  const double ate = ate_se3(dir / "traj.txt", clip());
+  testing::Test::RecordProperty("ate_se3_m", std::to_string(ate));
+  EXPECT_LT(ate, 0.05);
+}
+
+TEST(EdgeClient, TheSameInputGivesTheSameTrajectory) {
+  ASSERT_FALSE(clip().empty());
+  const mrvs::test::TempDir dir;
+  ASSERT_EQ(edge_client(clip(), dir / "a.txt", "--no-map --frames 120").exit_code, 0);
+  ASSERT_EQ(edge_client(clip(), dir / "b.txt", "--no-map --frames 120").exit_code, 0);
+  const auto a = lines_of(dir / "a.txt"), b = lines_of(dir / "b.txt");
+  ASSERT_GT(a.size(), 50u);
+  EXPECT_EQ(a, b);
+}
+
+TEST(EdgeClient, AMissingImuStreamIsADataErrorNamingTheFile) {
+  const mrvs::test::TempDir dir;
+  const fs::path seq = breakable_copy(dir);
+  fs::remove(seq / "mav0/imu0/data.csv");
+  const auto r = edge_client(seq, dir / "traj.txt");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("imu0/data.csv"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "traj.txt"));
+}
+
+TEST(EdgeClient, NonMonotonicTimestampsAreADataErrorNamingTheLine) {
+  const mrvs::test::TempDir dir;
+  const fs::path seq = breakable_copy(dir);
+  auto imu = lines_of(seq / "mav0/imu0/data.csv");
+  ASSERT_GT(imu.size(), 200u);
+  std::swap(imu[100], imu[101]);  // line 101 of the file goes back in time
+  write_lines(seq / "mav0/imu0/data.csv", imu);
+  const auto r = edge_client(seq, dir / "traj.txt");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("imu0/data.csv"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("101"), std::string::npos) << r.output;
+}
+
+TEST(EdgeClient, AnImuGapIsALoggedSkipAndTheFilterStartsAgain) {
+  const mrvs::test::TempDir dir;
+  const fs::path seq = breakable_copy(dir);
+  auto imu = lines_of(seq / "mav0/imu0/data.csv");
+  // 0.5 s of IMU missing 8 s in (200 Hz, one header line).
+  imu.erase(imu.begin() + 1 + 1600, imu.begin() + 1 + 1700);
+  write_lines(seq / "mav0/imu0/data.csv", imu);
+  const auto r = edge_client(seq, dir / "traj.txt", "--no-map --log-level info");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("IMU gap of 0.505 s"), std::string::npos) << r.output;
+  EXPECT_GE(value_of(r.output, "FRAMES_SKIPPED"), 1.0);
+  EXPECT_GT(value_of(r.output, "POSES"), 200.0) << r.output;  // it goes on after the gap
+  EXPECT_LT(ate_se3(dir / "traj.txt", seq), 0.15);
+}
+
+TEST(EdgeClient, UsageErrorsExitWithTwo) {
+  const mrvs::test::TempDir dir;
+  const auto no_map = edge_client(clip(), dir / "t.txt", "");
+  EXPECT_EQ(no_map.exit_code, 2) << no_map.output;
+  EXPECT_NE(no_map.output.find("--no-map"), std::string::npos);
+  const auto bad = edge_client(clip(), dir / "t.txt", "--no-map --set estimator.msckf.sigma_px=-1");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("estimator.msckf.sigma_px"), std::string::npos) << bad.output;
+}
+
+}  // namespace
+}  // namespace mrvs::edge
