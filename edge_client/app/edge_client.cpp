@@ -1,12 +1,14 @@
-// edge_client: the edge process. Today: stereo VIO on a EuRoC ASL folder (real or
-// generated) without the map (--no-map), writing a TUM trajectory of the IMU pose in the
-// map frame at each image time. The map-based update over DDS arrives with issue 8.
+// edge_client: the edge process. Stereo VIO on a EuRoC ASL folder (real or generated) with
+// the paper's two-stage update against the cloud's voxel map over Fast DDS (or plain VIO
+// with --no-map), writing a TUM trajectory of the IMU pose in the map frame at each image.
 //
-//   edge_client --dataset DIR --config config/euroc.yaml --output TRAJ.txt --no-map
+//   edge_client --dataset DIR --config config/euroc.yaml --output TRAJ.txt
+//       [--dds-profile config/dds/loopback.xml] [--no-map] [--fixed-resolution 0.02]
+//       [--query-pose-source gt] [--stage1-mode msckf_nullspace]
 //       [--groundtruth FILE] [--set estimator.msckf.sigma_px=1.5] [--frames N]
 //
-// stdout: "KEY: value" lines (frames, timings per column); logs and progress on stderr.
-// Exit codes: 0 success, 1 data error (named), 2 usage or configuration error.
+// stdout: "KEY: value" lines (frames, timing columns a-e, link figures); logs and progress
+// on stderr. Exit codes: 0 success, 1 data error (named), 2 usage or configuration error.
 #include <chrono>
 #include <string>
 #include <vector>
@@ -19,6 +21,7 @@
 #include "mrvs/config/yaml_document.h"
 #include "mrvs/core/cli.h"
 #include "mrvs/core/stats.h"
+#include "mrvs/edge/dds_map_service.h"
 #include "mrvs/edge/vio_system.h"
 #include "mrvs/io/dataset.h"
 #include "mrvs/io/trajectory_io.h"
@@ -34,6 +37,14 @@ struct Args {
   std::string groundtruth;
   std::vector<std::string> overrides;
   bool no_map = false;
+  std::string dds_profile;
+  int dds_domain = 42;
+  std::string dds_interface;
+  std::vector<std::string> dds_peers;
+  double map_wait_s = 10.0;
+  double fixed_resolution = -1.0;
+  std::string query_pose_source;
+  std::string stage1_mode;
   int frames = 0;
   int threads = 1;
   double progress_s = 5.0;
@@ -48,6 +59,25 @@ void add_options(CLI::App& app, Args& a) {
   app.add_option("--output", a.output, "TUM trajectory to write (IMU pose in the map frame at each image)")
       ->required();
   app.add_flag("--no-map", a.no_map, "Plain stereo VIO without the cloud map");
+  app.add_option("--dds-profile", a.dds_profile,
+                 "Fast DDS profile (config/dds/loopback.xml, two_hosts.xml, ...)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--dds-domain", a.dds_domain, "DDS domain")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 232));
+  app.add_option("--dds-interface", a.dds_interface, "Only this interface address (two-host profile)");
+  app.add_option("--dds-peer", a.dds_peers, "Initial peer address (two-host profile; repeatable)");
+  app.add_option("--map-wait", a.map_wait_s,
+                 "Seconds to wait for the cloud's map at start (it is also picked up later)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 600.0));
+  app.add_option("--fixed-resolution", a.fixed_resolution,
+                 "Ask one level only (m; the ablation), 0 = multi-resolution")
+      ->check(CLI::Range(0.0, 10.0));
+  app.add_option("--query-pose-source", a.query_pose_source, "estimated | gt (the paper's w/ GT rows)")
+      ->check(CLI::IsMember({"estimated", "gt"}));
+  app.add_option("--stage1-mode", a.stage1_mode, "known_landmark | msckf_nullspace (the reference code)")
+      ->check(CLI::IsMember({"known_landmark", "msckf_nullspace"}));
   app.add_option("--groundtruth", a.groundtruth,
                  "Ground truth for the one-time alignment (TUM or EuRoC csv; default: the dataset's own)")
       ->check(CLI::ExistingFile);
@@ -72,7 +102,16 @@ struct Inputs {
 mrvs::StatusOr<Inputs> load_inputs(const Args& a, bool* usage) {
   Inputs in;
   *usage = true;
-  MRVS_ASSIGN_OR_RETURN(const auto doc, mrvs::config::load_yaml_with_overrides(a.config, a.overrides));
+  std::vector<std::string> overrides = a.overrides;  // the shorthand flags, then --set
+  if (a.no_map) overrides.insert(overrides.begin(), "estimator.map.enabled=false");
+  if (a.fixed_resolution >= 0)
+    overrides.insert(overrides.begin(),
+                     fmt::format("estimator.map.fixed_resolution_m={}", a.fixed_resolution));
+  if (!a.query_pose_source.empty())
+    overrides.insert(overrides.begin(), "estimator.map.query_pose_source=" + a.query_pose_source);
+  if (!a.stage1_mode.empty())
+    overrides.insert(overrides.begin(), "estimator.map.stage1_mode=" + a.stage1_mode);
+  MRVS_ASSIGN_OR_RETURN(const auto doc, mrvs::config::load_yaml_with_overrides(a.config, overrides));
   MRVS_ASSIGN_OR_RETURN(in.options, mrvs::config::load_options<mrvs::edge::EdgeOptions>(doc));
   *usage = false;
   mrvs::io::DatasetOptions dataset_options;
@@ -100,23 +139,49 @@ mrvs::StatusOr<Inputs> load_inputs(const Args& a, bool* usage) {
 }
 
 struct Report {
-  std::vector<double> image_ms, tracking_ms, update_ms, total_ms;
-  int frames = 0, skipped = 0, initialized_at = -1, points_max = 0;
+  std::vector<double> image_ms, tracking_ms, update_ms, select_ms, ray_ms, total_ms;
+  std::vector<double> rays, hits, accepted, registered, bytes_up, bytes_down, rtt_ms;
+  int frames = 0, skipped = 0, initialized_at = -1, points_max = 0, frames_without_map = 0, requests = 0,
+      timeouts = 0;
   mrvs::io::Trajectory trajectory;
 };
+
+void print_ms(const char* key, const std::vector<double>& v) {
+  fmt::print("{}_MS_MEDIAN: {:.3f}\n{}_MS_P95: {:.3f}\n", key, quantile(v, 0.5), key, quantile(v, 0.95));
+}
+
+double mean(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x;
+  return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+}
 
 void print_report(const Report& r, double wall_s) {
   fmt::print("FRAMES: {}\nFRAMES_SKIPPED: {}\nINITIALIZED_AT_FRAME: {}\nPOSES: {}\n", r.frames, r.skipped,
              r.initialized_at, r.trajectory.size());
   fmt::print("WALL_S: {:.2f}\nRATE_FPS: {:.1f}\nPOINTS_IN_STATE_MAX: {}\n", wall_s,
              r.frames / std::max(wall_s, 1e-9), r.points_max);
-  const auto line = [](const char* key, const std::vector<double>& v) {
-    fmt::print("{}_MS_MEDIAN: {:.3f}\n{}_MS_P95: {:.3f}\n", key, quantile(v, 0.5), key, quantile(v, 0.95));
-  };
-  line("A_IMAGE", r.image_ms);
-  line("B_TRACKING", r.tracking_ms);
-  line("C_UPDATE", r.update_ms);
-  line("FRAME", r.total_ms);
+  print_ms("A_IMAGE", r.image_ms);
+  print_ms("B_TRACKING", r.tracking_ms);
+  print_ms("C_UPDATE", r.update_ms);
+  print_ms("D_SELECTION", r.select_ms);
+  print_ms("E_RAYS", r.ray_ms);
+  print_ms("FRAME", r.total_ms);
+  fmt::print("MAP_REQUESTS: {}\nMAP_TIMEOUTS: {}\nFRAMES_WITHOUT_MAP: {}\n", r.requests, r.timeouts,
+             r.frames_without_map);
+  fmt::print("RAYS_PER_FRAME: {:.1f}\nRAYS_PER_FRAME_MAX: {:.0f}\nHITS_PER_FRAME: {:.1f}\n", mean(r.rays),
+             quantile(r.rays, 1.0), mean(r.hits));
+  fmt::print("ACCEPTED_PER_FRAME: {:.1f}\nREGISTERED_PER_FRAME: {:.2f}\n", mean(r.accepted),
+             mean(r.registered));
+  fmt::print(
+      "PAYLOAD_UP_BYTES_PER_FRAME: {:.0f}\nPAYLOAD_DOWN_BYTES_PER_FRAME: "
+      "{:.0f}\nPAYLOAD_BYTES_PER_FRAME_MAX: {:.0f}\n",
+      mean(r.bytes_up), mean(r.bytes_down), [&] {
+        double m = 0.0;
+        for (std::size_t i = 0; i < r.bytes_up.size(); ++i) m = std::max(m, r.bytes_up[i] + r.bytes_down[i]);
+        return m;
+      }());
+  print_ms("RTT", r.rtt_ms);
 }
 
 /// Feeds the IMU samples up to the first one at or after t_ns (IMU clock).
@@ -129,23 +194,111 @@ mrvs::Status feed_imu_until(mrvs::edge::VioSystem& vio, const std::vector<mrvs::
   return absl::OkStatus();
 }
 
-void account(const mrvs::edge::StereoOutput& out, int k, Report* r) {
+void account(const mrvs::edge::StereoOutput& out, int k, bool use_map, Report* r) {
   const auto& e = out.estimate;
+  const auto& m = e.map;
+  const double select = m.selection_ms, rays = m.ray_ms;
   r->image_ms.push_back(out.tracked.timing.image_ms);
   r->tracking_ms.push_back(out.tracked.timing.tracking_ms);
-  r->update_ms.push_back(e.timing.total_ms);
+  r->update_ms.push_back(e.timing.total_ms - select - rays);
+  r->select_ms.push_back(select);
+  r->ray_ms.push_back(rays);
   r->total_ms.push_back(out.tracked.timing.image_ms + out.tracked.timing.tracking_ms + e.timing.total_ms);
   r->points_max = std::max(r->points_max, e.slam_points);
   if (e.initialized && r->initialized_at < 0) r->initialized_at = k;
   if (e.T_w_b) r->trajectory.push_back({e.t_imu_ns, *e.T_w_b});
+  if (!use_map || !e.initialized) return;
+  r->requests += m.requests;
+  r->timeouts += m.timeouts;
+  if (m.requests > 0 && m.answered == 0) ++r->frames_without_map;  // asked, no answer in time
+  r->rays.push_back(m.stage1_rays + m.registration_rays);
+  r->hits.push_back(m.stage1_hits + m.registration_hits);
+  r->accepted.push_back(m.stage1_accepted);
+  r->registered.push_back(m.registered);
+  r->bytes_up.push_back(static_cast<double>(m.bytes_up));
+  r->bytes_down.push_back(static_cast<double>(m.bytes_down));
+  if (m.answered > 0) r->rtt_ms.push_back(m.rtt_ms);
+}
+
+/// The DDS map service when the map is on (nullptr for --no-map).
+mrvs::StatusOr<std::unique_ptr<mrvs::edge::DdsMapService>> connect(const Args& a, bool enabled) {
+  if (!enabled) return std::unique_ptr<mrvs::edge::DdsMapService>();
+  if (a.dds_profile.empty()) {
+    return absl::InvalidArgumentError(
+        "the map needs a DDS profile: pass --dds-profile config/dds/loopback.xml (or two_hosts.xml), or "
+        "--no-map");
+  }
+  mrvs::edge::MapClientOptions o;
+  o.dds.profile_file = a.dds_profile;
+  o.dds.domain_id = a.dds_domain;
+  o.dds.interface_address = a.dds_interface;
+  o.dds.peers = a.dds_peers;
+  o.dds.name = "edge_client";
+  MRVS_ASSIGN_OR_RETURN(auto service, mrvs::edge::DdsMapService::create(o));
+  if (const auto info = service->client().wait_for_map_info(mrvs::from_seconds(a.map_wait_s))) {
+    spdlog::info("map '{}' from the cloud: origin [{:.3f} {:.3f} {:.3f}] m, {} levels", info->map_id,
+                 info->origin.x(), info->origin.y(), info->origin.z(), info->resolutions.size());
+  } else {
+    spdlog::warn("no map from the cloud after {:.1f} s: going on as plain VIO until it appears",
+                 a.map_wait_s);
+  }
+  return service;
+}
+
+void log_progress(const mrvs::edge::StereoOutput& out, std::size_t k, std::size_t n, double elapsed_s) {
+  const auto& e = out.estimate;
+  spdlog::info("frame {}/{} ({:.1f} fps), {}", k + 1, n, (k + 1) / elapsed_s,
+               e.initialized
+                   ? fmt::format("tracking: {} clones, {} points, map: {} rays, {} accepted{}", e.clones,
+                                 e.slam_points, e.map.stage1_rays + e.map.registration_rays,
+                                 e.map.stage1_accepted, e.map.timeouts > 0 ? " (cloud not answering)" : "")
+                   : e.status);
+}
+
+/// Runs every frame; false on a data error (printed).
+bool process(const Args& a, const mrvs::io::DatasetReader& reader, mrvs::edge::VioSystem& vio, bool use_map,
+             Report* report) {
+  const auto& frames = reader.stereo_frames();
+  const std::size_t n =
+      a.frames > 0 ? std::min<std::size_t>(static_cast<std::size_t>(a.frames), frames.size()) : frames.size();
+  const mrvs::DurationNs td = reader.calibration().cameras[0].time_offset_ns;
+  std::size_t next_imu = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last_progress = t0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& f = frames[k];
+    if (auto s = feed_imu_until(vio, reader.imu(), &next_imu, f.t_ns + td); !s.ok()) {
+      fmt::print(stderr, "edge_client: error: {}\n", std::string(s.message()));
+      return false;
+    }
+    auto left = reader.load_image(0, f.left);
+    auto right = left.ok() ? reader.load_image(1, f.right) : left;
+    if (!right.ok()) {
+      fmt::print(stderr, "edge_client: error: {}\n", std::string(right.status().message()));
+      return false;
+    }
+    auto out = vio.feed_stereo(f.t_ns, *left, *right);
+    ++report->frames;
+    if (!out.ok()) {
+      ++report->skipped;
+      spdlog::warn("frame {} ({} ns) skipped: {}", k, f.t_ns, std::string(out.status().message()));
+      continue;
+    }
+    account(*out, static_cast<int>(k), use_map, report);
+    if (out->estimate.initialized && report->initialized_at == static_cast<int>(k)) {
+      spdlog::info("{}", vio.estimator().initialization_summary());
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (a.progress_s > 0 && std::chrono::duration<double>(now - last_progress).count() >= a.progress_s) {
+      last_progress = now;
+      log_progress(*out, k, n, std::chrono::duration<double>(now - t0).count());
+    }
+  }
+  return true;
 }
 
 int run(const Args& a) {
   cv::setNumThreads(a.threads);
-  if (!a.no_map) {
-    fmt::print(stderr, "edge_client: the map-based update is not available yet; run with --no-map\n");
-    return mrvs::kExitUsageError;
-  }
   bool usage = false;
   auto in = load_inputs(a, &usage);
   if (!in.ok()) {
@@ -155,52 +308,16 @@ int run(const Args& a) {
   spdlog::info("calibration:\n{}", in->dataset->calibration().describe());
   spdlog::info("options:\n{}", mrvs::config::options_to_yaml(in->options));
   auto vio = mrvs::edge::VioSystem::create(in->options, in->dataset->calibration(), in->groundtruth);
-  if (!vio.ok()) {
-    fmt::print(stderr, "edge_client: error: {}\n", std::string(vio.status().message()));
+  const bool use_map = in->options.estimator.map.enabled;
+  auto map = vio.ok() ? connect(a, use_map) : vio.status();
+  if (!map.ok()) {
+    fmt::print(stderr, "edge_client: error: {}\n", std::string(map.status().message()));
     return mrvs::kExitUsageError;
   }
-  const auto& reader = *in->dataset;
-  const auto& frames = reader.stereo_frames();
-  const std::size_t n =
-      a.frames > 0 ? std::min<std::size_t>(static_cast<std::size_t>(a.frames), frames.size()) : frames.size();
-  const mrvs::DurationNs td = reader.calibration().cameras[0].time_offset_ns;
+  vio->set_map_service(map->get());
   Report report;
-  std::size_t next_imu = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  auto last_progress = t0;
-  for (std::size_t k = 0; k < n; ++k) {
-    const auto& f = frames[k];
-    if (auto s = feed_imu_until(*vio, reader.imu(), &next_imu, f.t_ns + td); !s.ok()) {
-      fmt::print(stderr, "edge_client: error: {}\n", std::string(s.message()));
-      return mrvs::kExitDataError;
-    }
-    auto left = reader.load_image(0, f.left);
-    auto right = left.ok() ? reader.load_image(1, f.right) : left;
-    if (!right.ok()) {
-      fmt::print(stderr, "edge_client: error: {}\n", std::string(right.status().message()));
-      return mrvs::kExitDataError;
-    }
-    auto out = vio->feed_stereo(f.t_ns, *left, *right);
-    ++report.frames;
-    if (!out.ok()) {
-      ++report.skipped;
-      spdlog::warn("frame {} ({} ns) skipped: {}", k, f.t_ns, std::string(out.status().message()));
-      continue;
-    }
-    account(*out, static_cast<int>(k), &report);
-    if (out->estimate.initialized && report.initialized_at == static_cast<int>(k)) {
-      spdlog::info("{}", vio->estimator().initialization_summary());
-    }
-    const auto now = std::chrono::steady_clock::now();
-    if (a.progress_s > 0 && std::chrono::duration<double>(now - last_progress).count() >= a.progress_s) {
-      last_progress = now;
-      const double el = std::chrono::duration<double>(now - t0).count();
-      spdlog::info("frame {}/{} ({:.1f} fps), {}", k + 1, n, (k + 1) / el,
-                   out->estimate.initialized ? fmt::format("tracking: {} clones, {} points",
-                                                           out->estimate.clones, out->estimate.slam_points)
-                                             : out->estimate.status);
-    }
-  }
+  if (!process(a, *in->dataset, *vio, use_map, &report)) return mrvs::kExitDataError;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (auto s = mrvs::io::write_tum_trajectory(a.output, report.trajectory); !s.ok()) {
     fmt::print(stderr, "edge_client: error: {}\n", std::string(s.message()));
@@ -217,7 +334,8 @@ int run(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Edge client: stereo VIO on a EuRoC ASL folder (map-based update: issue 8).", "edge_client"};
+  CLI::App app{"Edge client: stereo VIO with the cloud map over Fast DDS (or plain, --no-map).",
+               "edge_client"};
   Args args;
   add_options(app, args);
   if (auto exit_code = mrvs::parse_command_line(app, argc, argv, args.log_level)) return *exit_code;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <Eigen/Cholesky>
+
 #include "mrvs/edge/feature_measurement.h"
 
 namespace mrvs::edge {
@@ -39,8 +41,41 @@ std::optional<Measurement> MsckfUpdater::feature_measurement(const State& state,
   return std::move(m);
 }
 
-MsckfStats MsckfUpdater::update(State& state, const FeatureDatabase& db,
-                                const std::vector<FeatureId>& ids) const {
+std::optional<Measurement> MsckfUpdater::map_measurement(const State& state, const FeatureTrack& track,
+                                                         const MapPoint& point, bool nullspace_map,
+                                                         MsckfStats* stats) const {
+  StatusOr<FeatureRows> rows = feature_rows(state, track, point.p_w, point.p_w, options_.sigma_px);
+  if (!rows.ok() || rows->m.rows() < 2 * options_.min_observations - (nullspace_map ? 0 : 2)) {
+    ++stats->too_few_observations;
+    return std::nullopt;
+  }
+  Measurement m;
+  if (nullspace_map) {
+    StatusOr<SplitMeasurement> split = split_by_new_variable(rows->m, rows->H_f);
+    if (!split.ok()) {
+      ++stats->triangulation_failed;
+      return std::nullopt;
+    }
+    m = std::move(split->rest);
+  } else {
+    // Noise of the rows: pixel noise plus the map point's, correlated across the views.
+    const double s2 = options_.sigma_px * options_.sigma_px;
+    Eigen::MatrixXd S = point.variance * rows->H_f * rows->H_f.transpose();
+    S.diagonal().array() += s2;
+    const Eigen::LLT<Eigen::MatrixXd> llt(S);
+    m = rows->m;
+    m.H = options_.sigma_px * llt.matrixL().solve(m.H);
+    m.r = options_.sigma_px * llt.matrixL().solve(m.r);
+  }
+  if (mahalanobis(state, m) > options_.chi2_multiplier * chi2_.q95(m.rows())) {
+    ++stats->gated;
+    return std::nullopt;
+  }
+  return m;
+}
+
+MsckfStats MsckfUpdater::update(State& state, const FeatureDatabase& db, const std::vector<FeatureId>& ids,
+                                const std::map<FeatureId, MapPoint>& map_points, bool nullspace_map) const {
   MsckfStats stats;
   // The most observed features first, at most max_features.
   std::vector<const FeatureTrack*> tracks;
@@ -55,8 +90,12 @@ MsckfStats MsckfUpdater::update(State& state, const FeatureDatabase& db,
   stats.candidates = static_cast<int>(tracks.size());
   std::vector<Measurement> parts;
   for (const FeatureTrack* t : tracks) {
-    std::optional<Measurement> m = feature_measurement(state, *t, &stats);
+    const auto mp = map_points.find(t->id);
+    std::optional<Measurement> m = mp == map_points.end()
+                                       ? feature_measurement(state, *t, &stats)
+                                       : map_measurement(state, *t, mp->second, nullspace_map, &stats);
     if (!m) continue;
+    if (mp != map_points.end()) ++stats.with_map;
     stats.rows += m->rows();
     parts.push_back(std::move(*m));
   }

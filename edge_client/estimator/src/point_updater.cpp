@@ -35,10 +35,17 @@ std::optional<Measurement> PointUpdater::point_measurement(const State& state, c
   return m;
 }
 
-PointStats PointUpdater::update(State& state, const FeatureDatabase& db, TimestampNs t_ns) const {
+PointStats PointUpdater::update(State& state, const FeatureDatabase& db, TimestampNs t_ns,
+                                const std::optional<std::vector<FeatureId>>& only) const {
   PointStats stats;
   std::vector<FeatureId> ids;
-  for (const auto& [id, p] : state.points) ids.push_back(id);
+  if (only) {
+    for (FeatureId id : *only) {
+      if (state.points.count(id) != 0) ids.push_back(id);
+    }
+  } else {
+    for (const auto& [id, p] : state.points) ids.push_back(id);
+  }
   // Batches of at most max_in_update points, each linearised at the state the previous
   // batch left.
   const auto batch = static_cast<std::size_t>(options_.max_in_update);
@@ -101,7 +108,8 @@ PointStats PointUpdater::initialize(State& state, const FeatureDatabase& db,
   return stats;
 }
 
-int PointUpdater::remove_stale(State& state, const FeatureDatabase& db, TimestampNs t_ns) const {
+std::vector<FeatureId> PointUpdater::remove_stale(State& state, const FeatureDatabase& db,
+                                                  TimestampNs t_ns) const {
   std::vector<FeatureId> stale;
   for (const auto& [id, p] : state.points) {
     const FeatureTrack* track = db.find(id);
@@ -109,7 +117,7 @@ int PointUpdater::remove_stale(State& state, const FeatureDatabase& db, Timestam
       stale.push_back(id);
   }
   for (FeatureId id : stale) marginalize_point(state, id);
-  return static_cast<int>(stale.size());
+  return stale;
 }
 
 }  // namespace mrvs::edge

@@ -32,7 +32,9 @@ VioEstimator::VioEstimator(const EstimatorOptions& options, const config::Stereo
       g_w_(0.0, 0.0, -options.propagator.gravity_mps2),
       initializer_(options.initializer, rig, noise_, options.propagator.gravity_mps2),
       msckf_(options.msckf, options.triangulation),
-      points_(options.points, options.triangulation) {}
+      points_(options.points, options.triangulation),
+      map_stage_(options.map, options.triangulation, &groundtruth_),
+      registered_(options.map.registered_voxel_m, options.map.registered_per_voxel) {}
 
 StatusOr<VioEstimator> VioEstimator::create(const EstimatorOptions& options,
                                             const config::StereoRigCalibration& rig,
@@ -125,6 +127,7 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
   imu_fej_ = state.imu;
   state_ = std::move(state);
   db_ = FeatureDatabase();
+  registered_ = RegisteredMap(options_.map.registered_voxel_m, options_.map.registered_per_voxel);
   db_.add(frame);
   init_ns_ = frame.t_ns;
   init_summary_ = fmt::format("initialised ({}) at {} ns: {}; alignment {}", init.method, frame.t_ns,
@@ -148,6 +151,7 @@ std::optional<std::string> VioEstimator::imu_gap(TimestampNs from_ns, TimestampN
 void VioEstimator::restart() {
   state_.reset();
   db_ = FeatureDatabase();
+  registered_ = RegisteredMap(options_.map.registered_voxel_m, options_.map.registered_per_voxel);
   initializer_ = Initializer(options_.initializer, rig_, noise_, options_.propagator.gravity_mps2);
   // The initialiser starts from the IMU after the gap.
   for (const io::ImuSample& s : imu_) initializer_.feed_imu(s);
@@ -158,6 +162,7 @@ StatusOr<FrameOutput> VioEstimator::track(const FeatureFrame& frame) {
   out.t_ns = frame.t_ns;
   out.initialized = true;
   const Clock::time_point t0 = Clock::now();
+  deadline_ = t0 + std::chrono::microseconds(static_cast<std::int64_t>(options_.map.frame_budget_ms * 1e3));
   const TimestampNs t_imu = frame.t_ns + from_seconds(state_->time_offset_s);
   if (const auto gap = imu_gap(state_->imu.t_ns, t_imu)) {
     // Drop the samples before the gap: the next initialisation uses what follows it.
@@ -201,6 +206,10 @@ void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
   const bool full = static_cast<int>(s.clones.size()) > options_.state.max_clones;
   const TimestampNs marg_ns = full ? clone_to_marginalize(s, db_, options_.keyframe) : 0;
   const bool marg_oldest = full && marg_ns == s.clones.begin()->first;
+  const bool use_map = map_ != nullptr && options_.map.enabled;
+  // Triangulated points in the state: without the map, with it when asked to, and as the
+  // fallback while the cloud does not answer.
+  const bool points_from_tracks = !use_map || options_.map.points_from_tracks || !map_answering_;
   // MSCKF features: tracks that ended, and (when the oldest clone goes) those it saw; long
   // ones of the latter still tracked become points when there is room.
   std::vector<FeatureId> msckf_ids, point_ids;
@@ -208,7 +217,8 @@ void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
     if (s.points.count(id) == 0) msckf_ids.push_back(id);
   }
   if (marg_oldest) {
-    const bool points_allowed = to_seconds(frame.t_ns - init_ns_) >= options_.points.delay_s;
+    const bool points_allowed =
+        points_from_tracks && to_seconds(frame.t_ns - init_ns_) >= options_.points.delay_s;
     for (FeatureId id : db_.seen_at(marg_ns)) {
       const FeatureTrack* t = db_.find(id);
       if (s.points.count(id) != 0 || !t->seen_at(frame.t_ns)) continue;
@@ -216,23 +226,50 @@ void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
       (long_track && points_allowed ? point_ids : msckf_ids).push_back(id);
     }
   }
+  // Stage 1: the MSCKF update, with the features' map points where the cloud has them.
+  std::map<FeatureId, MapPoint> map_points;
+  if (use_map) map_points = map_stage_.associate(s, db_, &msckf_ids, *map_, deadline_, &out->map);
   Clock::time_point t0 = Clock::now();
-  out->msckf = msckf_.update(s, db_, msckf_ids);
+  out->msckf = msckf_.update(s, db_, msckf_ids, map_points, options_.map.stage1_mode == "msckf_nullspace");
   out->timing.msckf_ms = ms_since(t0);
-  t0 = Clock::now();
-  out->points = points_.update(s, db_, frame.t_ns);
-  const PointStats init = points_.initialize(s, db_, point_ids, frame.t_ns);
-  out->points.initialized = init.initialized;
-  out->points.init_failed = init.init_failed;
-  out->points.removed = points_.remove_stale(s, db_, frame.t_ns);
-  // Points keep only their newest observations; used MSCKF features leave the database.
-  for (const auto& [id, p] : s.points) db_.keep_from(id, frame.t_ns);
+  update_points(frame, point_ids, use_map, out);
+  if (out->map.requests > 0) map_answering_ = out->map.answered > 0;
+  // Used MSCKF features leave the database.
   for (FeatureId id : msckf_ids) db_.erase(id);
   for (FeatureId id : point_ids) {
     if (s.points.count(id) == 0) db_.erase(id);  // failed to initialise: used up as MSCKF would be
   }
-  out->timing.points_ms = ms_since(t0);
   if (full) marginalize(marg_ns, out);
+}
+
+void VioEstimator::update_points(const FeatureFrame& frame, const std::vector<FeatureId>& point_ids,
+                                 bool use_map, FrameOutput* out) {
+  State& s = *state_;
+  Clock::time_point t0 = Clock::now();
+  // Stage 2: the registered map points suitable now, and any triangulated points.
+  std::optional<std::vector<FeatureId>> ids;
+  if (use_map) {
+    ids = map_stage_.suitable(s, db_, registered_, frame.t_ns);
+    for (const auto& [id, p] : s.points) {
+      if (!p.from_map) ids->push_back(id);
+    }
+    out->map.selection_ms = ms_since(t0);
+  }
+  out->points = points_.update(s, db_, frame.t_ns, ids);
+  const PointStats init = points_.initialize(s, db_, point_ids, frame.t_ns);
+  out->points.initialized = init.initialized;
+  out->points.init_failed = init.init_failed;
+  const std::vector<FeatureId> removed = points_.remove_stale(s, db_, frame.t_ns);
+  for (FeatureId id : removed) registered_.remove(id);
+  out->points.removed = static_cast<int>(removed.size());
+  if (use_map && options_.map.register_new_features) {
+    map_stage_.register_new(s, db_, frame.t_ns, &registered_, *map_, deadline_, &out->map);
+  }
+  for (const auto& [id, p] : s.points) {
+    db_.keep_from(id, frame.t_ns);  // points keep only their newest observations
+    if (p.from_map) registered_.move(id, p.p_w);
+  }
+  out->timing.points_ms = ms_since(t0) - out->map.selection_ms;
 }
 
 void VioEstimator::marginalize(TimestampNs marg_ns, FrameOutput* out) {

@@ -9,50 +9,13 @@
 #include "mrvs/edge/msckf_updater.h"
 #include "mrvs/geometry/so3.h"
 #include "mrvs/test/numeric_jacobian.h"
+#include "msckf_scene.h"
 
 namespace mrvs::edge {
 namespace {
 
-config::StereoRigCalibration rig() {
-  camera::Params p;
-  p << 458.654, 457.296, 367.215, 248.375, -0.28340811, 0.07395907, 0.00019359, 1.76187114e-05;
-  config::StereoRigCalibration r;
-  for (int c = 0; c < 2; ++c) {
-    r.cameras[c].model = std::shared_ptr<const camera::CameraModel>(
-        std::move(*camera::make_camera(camera::DistortionModel::kRadTan, 752, 480, p)));
-    // Cameras looking along the body's x axis, 11 cm apart.
-    Mat3d R_b_c;  // columns: the camera's x, y, z axes in the body frame (z along body x)
-    R_b_c << 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0;
-    r.cameras[c].T_b_c = SE3d(R_b_c, Vec3d(0.0, 0.055 - 0.11 * c, 0.0));
-  }
-  return r;
-}
-
-/// A state with 6 clones along a sideways path and a track of a point seen by all of them.
-struct Scene {
-  State state{StateOptions{}, rig()};
-  FeatureTrack track;
-  Vec3d p_w{4.0, 0.3, 0.2};
-};
-
-Scene make_scene(double pixel_noise = 0.0) {
-  Scene s;
-  std::mt19937 rng(9);
-  std::normal_distribution<double> n(0.0, pixel_noise);
-  for (int k = 0; k < 6; ++k) {
-    s.state.imu.p_w_b = Vec3d(0.0, 0.1 * k, 0.02 * k);
-    s.state.imu.q_w_b = so3::exp_quat<double>(Vec3d(0.0, 0.0, 0.02 * k));
-    EXPECT_TRUE(augment_clone(s.state, 1000 * (k + 1), Vec3d::Zero()).ok());
-    for (int c = 0; c < 2; ++c) {
-      const CameraState& cam = s.state.cams[static_cast<std::size_t>(c)];
-      const Vec3d p_c = (s.state.clones.at(1000 * (k + 1)).T_w_b * cam.T_b_c).inverse() * s.p_w;
-      const Vec2d uv = *cam.model->project(p_c) + (pixel_noise > 0 ? Vec2d(n(rng), n(rng)) : Vec2d::Zero());
-      s.track.obs.push_back({1000 * (k + 1), c, uv, *cam.model->undistort(uv)});
-    }
-  }
-  s.state.P = Eigen::MatrixXd::Identity(s.state.dim(), s.state.dim()) * 1e-4;
-  return s;
-}
+using test::make_scene;
+using test::Scene;
 
 TEST(Msckf, NullSpaceProjectionRemovesTheFeatureExactly) {
   const Scene s = make_scene();
@@ -87,43 +50,22 @@ TEST(Msckf, FeatureRowsMatchTheMeasurementModelNumerically) {
     return feature_rows(moved, s.track, s.p_w, s.p_w, 1.0)->m.r;
   };
   const Eigen::MatrixXd num =
-      -test::numeric_jacobian<double>(residuals, static_cast<int>(rows->m.H.cols()), 1e-6);
-  EXPECT_TRUE(test::matrices_near(rows->m.H, num, 1e-3));
+      -mrvs::test::numeric_jacobian<double>(residuals, static_cast<int>(rows->m.H.cols()), 1e-6);
+  EXPECT_TRUE(mrvs::test::matrices_near(rows->m.H, num, 1e-3));
   const auto point = [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
     return feature_rows(s.state, s.track, s.p_w + Vec3d(d), s.p_w + Vec3d(d), 1.0)->m.r;
   };
-  EXPECT_TRUE(
-      test::matrices_near(rows->H_f, Eigen::MatrixXd(-test::numeric_jacobian<double>(point, 3, 1e-6)), 1e-3));
+  EXPECT_TRUE(mrvs::test::matrices_near(
+      rows->H_f, Eigen::MatrixXd(-mrvs::test::numeric_jacobian<double>(point, 3, 1e-6)), 1e-3));
 }
 
 TEST(Msckf, AnUpdatePullsAPerturbedCloneBack) {
   Scene s = make_scene(0.3);
   // Twenty more points, all seen by every clone.
   FeatureDatabase db;
+  test::add_points(s.state, 20, 0.3, 2, &db);
   std::vector<FeatureId> ids;
-  std::mt19937 rng(2);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::normal_distribution<double> n(0.0, 0.3);
-  for (FeatureId id = 1; id <= 20; ++id) {
-    const Vec3d p_w(4.0 + u(rng), 1.5 * u(rng), u(rng));
-    for (const auto& [t, clone] : s.state.clones) {
-      FeatureFrame f;
-      f.t_ns = t;
-      FeatureObservation o;
-      o.id = id;
-      const auto& cams = s.state.cams;
-      o.uv_left =
-          *cams[0].model->project((clone.T_w_b * cams[0].T_b_c).inverse() * p_w) + Vec2d(n(rng), n(rng));
-      o.xn_left = *cams[0].model->undistort(o.uv_left);
-      o.stereo = true;
-      o.uv_right =
-          *cams[1].model->project((clone.T_w_b * cams[1].T_b_c).inverse() * p_w) + Vec2d(n(rng), n(rng));
-      o.xn_right = *cams[1].model->undistort(o.uv_right);
-      f.features.push_back(o);
-      db.add(f);
-    }
-    ids.push_back(id);
-  }
+  for (FeatureId id = 1; id <= 20; ++id) ids.push_back(id);
   // The last clone is off by 3 cm and 0.5 deg; the prior allows it.
   const TimestampNs last = s.state.newest_clone_ns();
   const SE3d truth = s.state.clones.at(last).T_w_b;

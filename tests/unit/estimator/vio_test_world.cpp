@@ -9,6 +9,8 @@
 #include "mrvs/config/options.h"
 #include "mrvs/eval/trajectory_eval.h"
 #include "mrvs/io/trajectory_io.h"
+#include "mrvs/map/map_builder.h"
+#include "mrvs/map/query_engine.h"
 #include "mrvs/test/shared_data.h"
 
 namespace mrvs::edge::test {
@@ -104,14 +106,19 @@ std::unique_ptr<SyntheticSequence> build(const SyntheticOptions& o) {
   EXPECT_TRUE(sim::apply_preset(o.preset, r.options).ok());
   r.options.trajectory.window_start_s = o.start_s;
   r.options.trajectory.window_duration_s = o.duration_s;
-  r.options.map.spacing_near_m = r.options.map.spacing_far_m = 0.1;
+  r.options.map.spacing_near_m = r.options.map.spacing_far_m = o.map_spacing_m;
   auto world = sim::build_world(r);
   EXPECT_TRUE(world.ok()) << world.status();
   if (!world.ok()) return nullptr;
   auto seq = std::make_unique<SyntheticSequence>();
+  seq->options = o;
   seq->world = std::move(*world);
   Landmarks lm;
-  for (const auto& p : seq->world.map.clean_points) lm.p_w.push_back(p.position.cast<double>());
+  // About 10 000 landmarks, whatever the survey density.
+  const std::size_t step = std::max<std::size_t>(1, seq->world.map.clean_points.size() / 10000);
+  for (std::size_t i = 0; i < seq->world.map.clean_points.size(); i += step) {
+    lm.p_w.push_back(seq->world.map.clean_points[i].position.cast<double>());
+  }
   seq->frames = make_frames(seq->world, lm, o);
   for (const auto& s : seq->world.imu) seq->imu.push_back(s.measured);
   seq->groundtruth = io::to_trajectory(seq->world.states);
@@ -132,6 +139,55 @@ const SyntheticSequence* synthetic_sequence(const SyntheticOptions& o) {
   return it->second.get();
 }
 
+struct LocalMapService::Impl {
+  std::shared_ptr<const map::VoxelMap> map;
+  std::optional<map::QueryEngine> engine;
+};
+
+std::unique_ptr<LocalMapService> LocalMapService::create(const SyntheticSequence& seq, bool refine) {
+  map::RawCloud cloud;
+  for (const auto& p : seq.world.map.points) {
+    cloud.positions.push_back(p.position.cast<double>());
+    cloud.intensities.push_back(p.intensity);
+  }
+  map::MapBuilderOptions builder;
+  auto vm = map::build_voxel_map(cloud, builder);
+  EXPECT_TRUE(vm.ok()) << vm.status();
+  if (!vm.ok()) return nullptr;
+  auto out = std::make_unique<LocalMapService>();
+  out->impl_ = std::make_shared<Impl>();
+  out->impl_->map = std::make_shared<const map::VoxelMap>(std::move(*vm));
+  map::QueryOptions q;
+  q.refine_plane_intersection = refine;
+  auto engine = map::QueryEngine::create(out->impl_->map, q);
+  EXPECT_TRUE(engine.ok()) << engine.status();
+  if (!engine.ok()) return nullptr;
+  out->impl_->engine.emplace(std::move(*engine));
+  return out;
+}
+
+std::optional<MapDescription> LocalMapService::description() {
+  if (!announced) return std::nullopt;
+  return MapDescription{impl_->map->origin, impl_->map->resolutions(), 1};
+}
+
+MapReply LocalMapService::query(const std::vector<voxel::RayQuery>& batch, TimestampNs, DurationNs timeout) {
+  MapReply reply;
+  ++queries;
+  rays += static_cast<int>(batch.size());
+  if (!answer) {
+    reply.rtt_ns = timeout;
+    reply.failure = "outage";
+    return reply;
+  }
+  reply.answered = true;
+  for (const voxel::RayQuery& r : batch) {
+    const map::QueryResult q = impl_->engine->query(r);
+    reply.hits.push_back({q.status == map::QueryStatus::kHit, q.point});
+  }
+  return reply;
+}
+
 EstimatorOptions euroc_estimator_options() {
   auto o = config::load_options_file<EstimatorOptions>(std::filesystem::path(MRVS_CONFIG_DIR) / "euroc.yaml",
                                                        "estimator");
@@ -139,11 +195,13 @@ EstimatorOptions euroc_estimator_options() {
   return o.ok() ? *o : EstimatorOptions{};
 }
 
-io::Trajectory run_estimator(const SyntheticSequence& seq, const EstimatorOptions& options, int* skipped) {
+io::Trajectory run_estimator(const SyntheticSequence& seq, const EstimatorOptions& options, int* skipped,
+                             MapService* map, std::vector<FrameOutput>* outputs) {
   io::Trajectory out;
   auto vio = VioEstimator::create(options, seq.world.calibration, seq.groundtruth);
   EXPECT_TRUE(vio.ok()) << vio.status();
   if (!vio.ok()) return out;
+  vio->set_map_service(map);
   std::size_t next = 0;
   int skip = 0;
   for (const FeatureFrame& f : seq.frames) {
@@ -157,6 +215,7 @@ io::Trajectory run_estimator(const SyntheticSequence& seq, const EstimatorOption
       continue;
     }
     if (r->T_w_b) out.push_back({r->t_imu_ns, *r->T_w_b});
+    if (outputs != nullptr) outputs->push_back(*r);
   }
   if (skipped != nullptr) *skipped = skip;
   return out;

@@ -153,6 +153,8 @@ TEST(EdgeClient, UsageErrorsExitWithTwo) {
   const auto no_map = edge_client(clip(), dir / "t.txt", "");
   EXPECT_EQ(no_map.exit_code, 2) << no_map.output;
   EXPECT_NE(no_map.output.find("--no-map"), std::string::npos);
+  EXPECT_NE(no_map.output.find("--dds-profile"), std::string::npos)
+      << no_map.output;  // the map needs the link
   const auto bad = edge_client(clip(), dir / "t.txt", "--no-map --set estimator.msckf.sigma_px=-1");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("estimator.msckf.sigma_px"), std::string::npos) << bad.output;

@@ -12,4 +12,10 @@ struct RayQuery {
   float resolution = 0.0f;                               ///< r*: voxel size of the level to traverse, m
 };
 
+/// The cloud's answer to one ray (the paper's 12-byte downlink when it hit).
+struct RayHit {
+  bool hit = false;
+  Eigen::Vector3f point = Eigen::Vector3f::Zero();  ///< map-local, m (valid when hit)
+};
+
 }  // namespace mrvs::voxel

@@ -3,6 +3,7 @@
 // triangulated from the clones, their rows projected onto the left null space of H_f (the
 // feature drops out), gated by chi-square, stacked, compressed by QR and applied in one EKF
 // update. The tracks used are removed from the database by the caller.
+#include <map>
 #include <vector>
 
 #include "mrvs/config/options.h"
@@ -35,16 +36,34 @@ struct MsckfStats {
   int triangulation_failed = 0;
   int gated = 0;  ///< rejected by chi-square
   int used = 0;
-  int rows = 0;   ///< after null-space projection, before compression
-  Status status;  ///< of the EKF update
+  int rows = 0;      ///< after null-space projection, before compression
+  int with_map = 0;  ///< of `used`, features updated with their map point
+  Status status;     ///< of the EKF update
+};
+
+/// A map point associated with a feature for stage 1 (paper section IV-E.2).
+struct MapPoint {
+  Vec3d p_w = Vec3d::Zero();  ///< world (map frame)
+  double variance = 0.0;      ///< isotropic, m^2
 };
 
 class MsckfUpdater {
  public:
   MsckfUpdater(const MsckfOptions& options, const TriangulationOptions& triangulation);
 
-  /// Updates `state` with the features `ids` of `db`.
-  MsckfStats update(State& state, const FeatureDatabase& db, const std::vector<FeatureId>& ids) const;
+  /// Updates `state` with the features `ids` of `db`: with their map point when `map_points`
+  /// has one (known landmark, or the reference code's null-space use with `nullspace_map`),
+  /// otherwise triangulated.
+  MsckfStats update(State& state, const FeatureDatabase& db, const std::vector<FeatureId>& ids,
+                    const std::map<FeatureId, MapPoint>& map_points = {}, bool nullspace_map = false) const;
+
+  /// Stage-1 rows of a feature whose position is the map point: known_landmark keeps every
+  /// row, its noise sigma^2 I + H_f (v I) H_f^T whitened to sigma^2 I; nullspace_map
+  /// projects H_f out like the MSCKF, linearised at the map point. Gated; nullopt when not
+  /// usable (`stats` counts why).
+  std::optional<Measurement> map_measurement(const State& state, const FeatureTrack& track,
+                                             const MapPoint& point, bool nullspace_map,
+                                             MsckfStats* stats) const;
 
   /// The null-space projected, gated rows of one feature (exposed for tests and issue 8).
   /// nullopt when it is not usable; `stats` counts why.

@@ -3,6 +3,7 @@
 // delayed initialisation (the feature isolated from the rest of its rows, which then update
 // the state), are updated with their newest observations every frame, and leave when their
 // track is lost or they keep failing the gate.
+#include <optional>
 #include <vector>
 
 #include "mrvs/config/options.h"
@@ -47,13 +48,15 @@ class PointUpdater {
  public:
   PointUpdater(const PointOptions& options, const TriangulationOptions& triangulation);
 
-  /// Updates every point of the state with its observations at clone `t_ns`.
-  PointStats update(State& state, const FeatureDatabase& db, TimestampNs t_ns) const;
+  /// Updates the points of the state (all, or only `ids`) with their observations at clone
+  /// `t_ns`.
+  PointStats update(State& state, const FeatureDatabase& db, TimestampNs t_ns,
+                    const std::optional<std::vector<FeatureId>>& ids = std::nullopt) const;
   /// Adds the features `ids` to the state (delayed initialisation), while there is room.
   PointStats initialize(State& state, const FeatureDatabase& db, const std::vector<FeatureId>& ids,
                         TimestampNs t_ns) const;
-  /// Removes the points not seen at `t_ns` or failing too often; returns how many.
-  int remove_stale(State& state, const FeatureDatabase& db, TimestampNs t_ns) const;
+  /// Removes the points not seen at `t_ns` or failing too often; returns their ids.
+  std::vector<FeatureId> remove_stale(State& state, const FeatureDatabase& db, TimestampNs t_ns) const;
 
   const PointOptions& options() const { return options_; }
 

@@ -16,6 +16,7 @@
 #include "mrvs/edge/global_alignment.h"
 #include "mrvs/edge/initializer.h"
 #include "mrvs/edge/keyframe_policy.h"
+#include "mrvs/edge/map_stage.h"
 #include "mrvs/edge/msckf_updater.h"
 #include "mrvs/edge/point_updater.h"
 
@@ -44,6 +45,7 @@ struct EstimatorOptions : config::OptionsEquality<EstimatorOptions> {
   KeyframeOptions keyframe;
   InitializerOptions initializer;
   AlignmentOptions alignment;
+  MapOptions map;
 
   template <class V>
   void visit(V& v) {
@@ -55,6 +57,7 @@ struct EstimatorOptions : config::OptionsEquality<EstimatorOptions> {
     v.section("keyframe", keyframe, "clone marginalisation");
     v.section("initializer", initializer, "initialisation");
     v.section("alignment", alignment, "one-time alignment to the map frame");
+    v.section("map", map, "the cloud map: stage-1 association, stage-2 registration");
   }
 };
 
@@ -64,7 +67,7 @@ struct EstimatorTiming {
   double msckf_ms = 0.0;      ///< MSCKF update (the paper's state update without map points)
   double points_ms = 0.0;     ///< point update, initialisation, removal
   double marginalize_ms = 0.0;
-  double total_ms = 0.0;
+  double total_ms = 0.0;  ///< the whole filter step, map work included
 };
 
 struct FrameOutput {
@@ -75,6 +78,7 @@ struct FrameOutput {
   std::string status;  ///< why it waits, or what went wrong this frame
   MsckfStats msckf;
   PointStats points;
+  MapFrameStats map;
   int clones = 0;
   int slam_points = 0;
   EstimatorTiming timing;
@@ -100,6 +104,10 @@ class VioEstimator {
   /// IMU (for the tracker's KLT prior); nullopt before initialisation or without IMU.
   std::optional<SE3d> predict_T_c_cprev(TimestampNs t_cam_ns) const;
 
+  /// The cloud map to use (not owned; nullptr: none). Without it, or with map.enabled false,
+  /// the filter is plain VIO.
+  void set_map_service(MapService* service) { map_ = service; }
+
   bool initialized() const { return state_.has_value(); }
   const State* state() const { return state_ ? &*state_ : nullptr; }
   const EstimatorOptions& options() const { return options_; }
@@ -115,6 +123,8 @@ class VioEstimator {
   Status start(const InitializationResult& init, const FeatureFrame& frame);
   StatusOr<FrameOutput> track(const FeatureFrame& frame);
   void update(const FeatureFrame& frame, FrameOutput* out);
+  void update_points(const FeatureFrame& frame, const std::vector<FeatureId>& point_ids, bool use_map,
+                     FrameOutput* out);
   void marginalize(TimestampNs marg_ns, FrameOutput* out);
   std::vector<io::ImuSample> imu_vector() const;
   /// The first gap longer than max_imu_gap_s in (from_ns, to_ns], as a message.
@@ -129,6 +139,11 @@ class VioEstimator {
   Initializer initializer_;
   MsckfUpdater msckf_;
   PointUpdater points_;
+  MapStage map_stage_;
+  MapService* map_ = nullptr;
+  RegisteredMap registered_;
+  MapStage::Clock::time_point deadline_;
+  bool map_answering_ = false;  ///< the cloud answered the last request (else: triangulated points)
   std::optional<State> state_;
   ImuState imu_fej_;  ///< first estimate of the IMU at the newest clone (before its update)
   FeatureDatabase db_;

@@ -57,6 +57,9 @@ class VioSystem {
   /// clock). The IMU must cover t_ns (VioEstimator::feed_frame).
   StatusOr<StereoOutput> feed_stereo(TimestampNs t_ns, const cv::Mat& left, const cv::Mat& right);
 
+  /// The cloud map (not owned; nullptr: plain VIO).
+  void set_map_service(MapService* service) { estimator_.set_map_service(service); }
+
   const VioEstimator& estimator() const { return estimator_; }
 
  private:

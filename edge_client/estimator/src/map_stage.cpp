@@ -1,0 +1,155 @@
+#include "mrvs/edge/map_stage.h"
+
+#include <algorithm>
+#include <set>
+
+#include "mrvs/edge/feature_measurement.h"
+#include "mrvs/edge/state_helper.h"
+
+namespace mrvs::edge {
+namespace {
+
+double ms_since(MapStage::Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(MapStage::Clock::now() - t0).count();
+}
+
+}  // namespace
+
+MapStage::MapStage(const MapOptions& options, const TriangulationOptions& triangulation,
+                   const io::Trajectory* groundtruth)
+    : options_(options), triangulation_(triangulation), groundtruth_(groundtruth) {}
+
+std::vector<voxel::RayHit> MapStage::query(MapService& service, const std::vector<FeatureRay>& rays,
+                                           TimestampNs stamp_ns, Clock::time_point deadline,
+                                           MapFrameStats* stats) const {
+  if (rays.empty()) return {};
+  const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - Clock::now()).count();
+  const DurationNs timeout = std::min<DurationNs>(from_seconds(options_.query_timeout_ms * 1e-3), left);
+  ++stats->requests;
+  if (timeout <= 0) {
+    ++stats->timeouts;
+    return {};
+  }
+  std::vector<voxel::RayQuery> batch;
+  batch.reserve(rays.size());
+  for (const FeatureRay& r : rays) batch.push_back(r.ray);
+  const MapReply reply = service.query(batch, stamp_ns, timeout);
+  stats->rtt_ms += 1e-6 * static_cast<double>(reply.rtt_ns);
+  stats->bytes_up += 32 * batch.size();
+  if (!reply.answered || reply.hits.size() != batch.size()) {
+    ++stats->timeouts;
+    return {};
+  }
+  ++stats->answered;
+  stats->bytes_down += (batch.size() + 7) / 8;
+  for (const voxel::RayHit& h : reply.hits) stats->bytes_down += h.hit ? 12 : 0;
+  return reply.hits;
+}
+
+std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const FeatureDatabase& db,
+                                                  std::vector<FeatureId>* ids, MapService& service,
+                                                  Clock::time_point deadline, MapFrameStats* stats) const {
+  std::map<FeatureId, MapPoint> out;
+  const auto t0 = Clock::now();
+  const auto map = service.description();
+  stats->available = map.has_value();
+  if (!map) return out;
+  // The most observed candidates, one ray each.
+  std::vector<const FeatureTrack*> tracks;
+  for (FeatureId id : *ids) {
+    if (const FeatureTrack* t = db.find(id)) tracks.push_back(t);
+  }
+  std::stable_sort(tracks.begin(), tracks.end(), [](const FeatureTrack* a, const FeatureTrack* b) {
+    return a->obs.size() > b->obs.size();
+  });
+  const int cap = std::min(options_.max_stage1_features, options_.max_rays_per_frame);
+  std::vector<FeatureRay> rays;
+  for (const FeatureTrack* t : tracks) {
+    if (static_cast<int>(rays.size()) >= cap) break;
+    const auto p = triangulate(clone_bearings(state, *t), triangulation_);
+    if (!p.ok()) continue;
+    if (auto ray = make_feature_ray(state, *groundtruth_, *t, *p, *map, options_)) rays.push_back(*ray);
+  }
+  stats->stage1_rays = static_cast<int>(rays.size());
+  const std::vector<voxel::RayHit> hits = query(service, rays, state.newest_clone_ns(), deadline, stats);
+  for (std::size_t i = 0; i < hits.size(); ++i) {
+    if (!hits[i].hit) continue;
+    ++stats->stage1_hits;
+    const Vec3d X = map->origin + hits[i].point.cast<double>();
+    if (!accept_hit(state, *groundtruth_, *db.find(rays[i].id), rays[i], X, options_)) continue;
+    out[rays[i].id] = MapPoint{X, map_point_variance(options_, rays[i].ray.resolution)};
+  }
+  stats->stage1_accepted = static_cast<int>(out.size());
+  // The reference code's rule: with most features on the map, the others are suspect.
+  if (!rays.empty() && static_cast<double>(out.size()) / rays.size() >= options_.drop_unmatched_hit_rate) {
+    std::set<FeatureId> queried;
+    for (const FeatureRay& r : rays) queried.insert(r.id);
+    const auto before = ids->size();
+    ids->erase(std::remove_if(ids->begin(), ids->end(),
+                              [&](FeatureId id) { return queried.count(id) != 0 && out.count(id) == 0; }),
+               ids->end());
+    stats->stage1_dropped = static_cast<int>(before - ids->size());
+  }
+  stats->ray_ms += ms_since(t0);
+  return out;
+}
+
+std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabase& db, TimestampNs t_ns,
+                                              RegisteredMap* grid, MapService& service,
+                                              Clock::time_point deadline, MapFrameStats* stats) const {
+  std::vector<FeatureId> added;
+  const auto t0 = Clock::now();
+  const auto map = service.description();
+  if (!map) return added;
+  std::vector<FeatureRay> rays;
+  const int budget = options_.max_rays_per_frame - stats->stage1_rays;
+  for (const auto& [id, track] : db.tracks()) {
+    if (static_cast<int>(rays.size()) >= budget) break;
+    if (track.first_ns() != t_ns || track.obs.size() < 2 || state.points.count(id) != 0)
+      continue;  // new stereo pairs
+    const auto p = triangulate(clone_bearings(state, track), triangulation_);
+    if (!p.ok() || !grid->has_room(*p)) continue;
+    if (auto ray = make_feature_ray(state, *groundtruth_, track, *p, *map, options_)) rays.push_back(*ray);
+  }
+  stats->registration_rays = static_cast<int>(rays.size());
+  const std::vector<voxel::RayHit> hits = query(service, rays, t_ns, deadline, stats);
+  for (std::size_t i = 0; i < hits.size(); ++i) {
+    if (static_cast<int>(state.points.size()) >= state.options().max_slam) break;
+    if (!hits[i].hit) continue;
+    ++stats->registration_hits;
+    const Vec3d X = map->origin + hits[i].point.cast<double>();
+    const FeatureTrack& track = *db.find(rays[i].id);
+    if (!accept_hit(state, *groundtruth_, track, rays[i], X, options_) || !grid->add(rays[i].id, X)) continue;
+    // A landmark known from the map: its variance, independent of the state.
+    PointState point;
+    point.p_w = point.fej = X;
+    point.slot = state.append(3);
+    state.P.block<3, 3>(point.slot.offset, point.slot.offset) =
+        Mat3d::Identity() * map_point_variance(options_, rays[i].ray.resolution);
+    point.added_ns = t_ns;
+    point.from_map = true;
+    state.points.emplace(rays[i].id, point);
+    added.push_back(rays[i].id);
+  }
+  stats->registered = static_cast<int>(added.size());
+  stats->ray_ms += ms_since(t0);
+  return added;
+}
+
+std::vector<FeatureId> MapStage::suitable(const State& state, const FeatureDatabase& db,
+                                          const RegisteredMap& grid, TimestampNs t_ns) const {
+  std::set<FeatureId> seen;
+  for (const auto& [id, p] : state.points) {
+    const FeatureTrack* t = db.find(id);
+    if (p.from_map && t != nullptr && t->seen_at(t_ns)) seen.insert(id);
+  }
+  std::set<FeatureId> out;
+  for (FeatureId id : seen) {
+    for (FeatureId n : grid.neighbourhood(state.points.at(id).p_w, options_.registered_neighbourhood)) {
+      if (seen.count(n) != 0) out.insert(n);
+    }
+  }
+  return {out.begin(), out.end()};
+}
+
+}  // namespace mrvs::edge

@@ -1,0 +1,444 @@
+// The map side of the estimator: the registered-point grid against brute force, the ray of a
+// feature and the edge's multi-view check, the stage-1 map measurement (whitening by the map
+// noise, absolute correction that the null-space mode cannot give), the stage's handling of
+// the cloud's answers, silence and deadline, and the whole two-stage update in process on a
+// generated sequence (map over an in-process QueryEngine, no DDS).
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "mrvs/edge/feature_measurement.h"
+#include "mrvs/edge/map_stage.h"
+#include "mrvs/edge/msckf_updater.h"
+#include "mrvs/voxel/resolution.h"
+#include "msckf_scene.h"
+#include "vio_test_world.h"
+
+namespace mrvs::edge {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::array<long, 3> cell(const Vec3d& p, double v) {
+  return {static_cast<long>(std::floor(p.x() / v)), static_cast<long>(std::floor(p.y() / v)),
+          static_cast<long>(std::floor(p.z() / v))};
+}
+
+std::set<FeatureId> brute_neighbourhood(const std::map<FeatureId, Vec3d>& in, const Vec3d& p, double v,
+                                        int radius) {
+  std::set<FeatureId> out;
+  const auto c = cell(p, v);
+  for (const auto& [id, q] : in) {
+    const auto d = cell(q, v);
+    bool near = true;
+    for (int i = 0; i < 3; ++i) near = near && std::abs(d[i] - c[i]) <= radius;
+    if (near) out.insert(id);
+  }
+  return out;
+}
+
+TEST(RegisteredMap, MatchesBruteForce) {
+  const double v = 0.3;
+  RegisteredMap grid(v, 5);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  std::map<FeatureId, Vec3d> kept;
+  std::map<std::array<long, 3>, int> count;
+  for (FeatureId id = 0; id < 2000; ++id) {
+    const Vec3d p(u(rng), u(rng), 0.3 * u(rng));
+    const bool room = count[cell(p, v)] < 5;
+    EXPECT_EQ(grid.has_room(p), room);
+    ASSERT_EQ(grid.add(id, p), room) << id;
+    if (room) ++count[cell(p, v)], kept[id] = p;
+  }
+  EXPECT_FALSE(grid.add(5000, Vec3d(NAN, 0.0, 0.0)));
+  EXPECT_EQ(grid.size(), kept.size());
+  // Remove a third, move a third (where there is room).
+  for (auto it = kept.begin(); it != kept.end();) {
+    const FeatureId id = it->first;
+    if (id % 3 == 0) {
+      grid.remove(id);
+      --count[cell(it->second, v)];
+      it = kept.erase(it);
+      continue;
+    }
+    if (id % 3 == 1) {
+      const Vec3d to = it->second + Vec3d(0.31, -0.2, 0.0);
+      if (count[cell(to, v)] < 5 && cell(to, v) != cell(it->second, v)) {
+        --count[cell(it->second, v)];
+        ++count[cell(to, v)];
+        it->second = to;
+      }
+      grid.move(id, to);
+    }
+    ++it;
+  }
+  EXPECT_EQ(grid.size(), kept.size());
+  for (int k = 0; k < 50; ++k) {
+    const Vec3d p(u(rng), u(rng), 0.3 * u(rng));
+    for (int radius : {0, 1, 2}) {
+      const auto got = grid.neighbourhood(p, radius);
+      EXPECT_EQ(std::set<FeatureId>(got.begin(), got.end()), brute_neighbourhood(kept, p, v, radius));
+    }
+  }
+}
+
+MapDescription indoor_map() {
+  MapDescription m;
+  m.origin = Vec3d(10.0, -5.0, 2.0);
+  m.resolutions = {0.01, 0.02, 0.03};
+  return m;
+}
+
+/// Ground truth of the scene's clones (for query_pose_source gt).
+io::Trajectory clone_truth(const State& state) {
+  io::Trajectory gt;
+  for (const auto& [t, c] : state.clones) gt.push_back({t, c.T_w_b});
+  return gt;
+}
+
+TEST(MapAssociation, TheRayGoesThroughTheNewestLeftObservation) {
+  const test::Scene s = test::make_scene();
+  const MapDescription map = indoor_map();
+  MapOptions o;
+  const auto ray = make_feature_ray(s.state, {}, s.track, s.p_w, map, o);
+  ASSERT_TRUE(ray.has_value());
+  const SE3d T_w_c = s.state.clones.at(6000).T_w_b * s.state.cams[0].T_b_c;
+  EXPECT_EQ(ray->t_ns, 6000);
+  EXPECT_EQ(ray->cam, 0);
+  EXPECT_LT((ray->ray.origin.cast<double>() + map.origin - T_w_c.translation()).norm(), 1e-5);
+  const Vec3d to_point = s.p_w - T_w_c.translation();
+  EXPECT_LT(ray->ray.direction.cast<double>().normalized().cross(to_point.normalized()).norm(), 1e-6);
+  EXPECT_NEAR(ray->ray.initial_distance, to_point.norm(), 1e-5);
+  EXPECT_NEAR(ray->depth_m, (T_w_c.inverse() * s.p_w).z(), 1e-9);
+  const auto level = voxel::select_level(map.resolutions, ray->depth_m, ray->focal_px);
+  ASSERT_TRUE(level.has_value());
+  EXPECT_FLOAT_EQ(ray->ray.resolution, static_cast<float>(map.resolutions[*level]));
+  o.fixed_resolution_m = 0.02;
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.02f);
+  // Behind the camera: no ray.
+  EXPECT_FALSE(make_feature_ray(s.state, {}, s.track, T_w_c * Vec3d(0.0, 0.0, -2.0), map, o).has_value());
+}
+
+TEST(MapAssociation, TheMultiViewCheckAcceptsTheTruePointOnly) {
+  test::Scene s = test::make_scene();
+  const MapDescription map = indoor_map();
+  MapOptions o;
+  const auto ray = make_feature_ray(s.state, {}, s.track, s.p_w, map, o);
+  ASSERT_TRUE(ray.has_value());
+  double error = -1.0;
+  EXPECT_TRUE(accept_hit(s.state, {}, s.track, *ray, s.p_w, o, &error));
+  EXPECT_LT(error, 1e-3);
+  // 5 cm across the ray: several pixels in the other views.
+  const Vec3d v = ray->ray.direction.cast<double>().normalized();
+  const Vec3d across = v.cross(Vec3d::UnitZ()).normalized();
+  EXPECT_FALSE(accept_hit(s.state, {}, s.track, *ray, s.p_w + 0.05 * across, o, &error));
+  EXPECT_GT(error, o.threshold_upper_px);
+  // 20 cm along it: consistent views, but too far from the triangulated point.
+  EXPECT_FALSE(accept_hit(s.state, {}, s.track, *ray, s.p_w + 0.2 * v, o));
+  o.max_hit_distance_m = 1.0;
+  EXPECT_TRUE(accept_hit(s.state, {}, s.track, *ray, s.p_w + 0.05 * v, o));
+  // With the state's clones 4 cm off, the check on the estimated poses refuses the true
+  // point; on ground-truth poses (query_pose_source gt) it takes it.
+  const io::Trajectory gt = clone_truth(s.state);
+  for (auto& [t, c] : s.state.clones) {
+    if (t != 6000)
+      c.T_w_b = SE3d(c.T_w_b.quaternion(), c.T_w_b.translation() + Vec3d(0.0, 0.01 * (t / 1000), 0.0));
+  }
+  o.max_hit_distance_m = 0.15;
+  EXPECT_FALSE(accept_hit(s.state, gt, s.track, *ray, s.p_w, o));
+  o.query_pose_source = "gt";
+  EXPECT_TRUE(accept_hit(s.state, gt, s.track, *ray, s.p_w, o, &error));
+  EXPECT_LT(error, 1e-3);
+}
+
+TEST(MapMeasurement, KnownLandmarkRowsAreWhitenedByTheMapNoise) {
+  const test::Scene s = test::make_scene(0.5);
+  MsckfOptions mo;
+  const MsckfUpdater updater(mo, TriangulationOptions{});
+  const MapPoint point{s.p_w + Vec3d(0.004, -0.003, 0.002), 0.01 * 0.01};
+  MsckfStats stats;
+  const auto m = updater.map_measurement(s.state, s.track, point, false, &stats);
+  ASSERT_TRUE(m.has_value());
+  auto rows = feature_rows(s.state, s.track, point.p_w, point.p_w, mo.sigma_px);
+  ASSERT_TRUE(rows.ok());
+  ASSERT_EQ(m->rows(), rows->m.rows());  // no null-space projection: every row stays
+  // Brute force: information and weighted residual with the full noise covariance
+  // S = sigma^2 I + var H_f H_f^T, in units of sigma^2.
+  const double s2 = mo.sigma_px * mo.sigma_px;
+  Eigen::MatrixXd S = point.variance * rows->H_f * rows->H_f.transpose();
+  S.diagonal().array() += s2;
+  const Eigen::MatrixXd Si = S.inverse();
+  const Eigen::MatrixXd info = s2 * rows->m.H.transpose() * Si * rows->m.H;
+  EXPECT_LT((m->H.transpose() * m->H - info).norm(), 1e-6 * info.norm());
+  const Eigen::VectorXd g = s2 * rows->m.H.transpose() * Si * rows->m.r;
+  EXPECT_LT((m->H.transpose() * m->r - g).norm(), 1e-6 * g.norm() + 1e-12);
+  // The reference code's mode projects the point out: 2N - 3 rows.
+  const auto ns = updater.map_measurement(s.state, s.track, point, true, &stats);
+  ASSERT_TRUE(ns.has_value());
+  EXPECT_EQ(ns->rows(), rows->m.rows() - 3);
+}
+
+/// Clones shifted together by `shift` (the unobservable direction of plain VIO), updated with
+/// 20 features whose map points are known; the clones' mean position error after the update.
+double mean_error_after_map_update(bool nullspace, const Vec3d& shift) {
+  test::Scene s = test::make_scene();
+  FeatureDatabase db;
+  const std::vector<Vec3d> truth = test::add_points(s.state, 20, 0.3, 5, &db);
+  std::map<TimestampNs, Vec3d> true_positions;
+  for (auto& [t, c] : s.state.clones) {
+    true_positions[t] = c.T_w_b.translation();
+    c.T_w_b = c.fej = SE3d(c.T_w_b.quaternion(), c.T_w_b.translation() + shift);
+    // Loose, independent priors: the shift is within them.
+    s.state.P.block<3, 3>(c.slot.offset + 3, c.slot.offset + 3) = Mat3d::Identity() * 0.1 * 0.1;
+  }
+  std::vector<FeatureId> ids;
+  std::map<FeatureId, MapPoint> map_points;
+  for (FeatureId id = 1; id <= 20; ++id) {
+    ids.push_back(id);
+    map_points[id] = MapPoint{truth[id - 1], 0.005 * 0.005};
+  }
+  const MsckfUpdater updater(MsckfOptions{}, TriangulationOptions{});
+  const MsckfStats stats = updater.update(s.state, db, ids, map_points, nullspace);
+  EXPECT_TRUE(stats.status.ok()) << stats.status;
+  EXPECT_EQ(stats.with_map, 20);
+  double sum = 0.0;
+  for (const auto& [t, c] : s.state.clones) sum += (c.T_w_b.translation() - true_positions[t]).norm();
+  return sum / static_cast<double>(s.state.clones.size());
+}
+
+TEST(MapMeasurement, KnownLandmarksCorrectAShiftThatTheNullSpaceModeCannot) {
+  const Vec3d shift(0.02, 0.05, -0.03);
+  const double known = mean_error_after_map_update(false, shift);
+  const double nullspace = mean_error_after_map_update(true, shift);
+  EXPECT_LT(known, 0.1 * shift.norm()) << "known_landmark";
+  EXPECT_GT(nullspace, 0.7 * shift.norm()) << "msckf_nullspace";
+}
+
+/// A cloud that answers each ray with its point at the initial distance (the triangulated
+/// point) moved by `offset`, or not at all.
+class FakeCloud : public MapService {
+ public:
+  std::optional<MapDescription> description() override { return map; }
+  MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs, DurationNs timeout) override {
+    ++calls;
+    last_timeout = timeout;
+    MapReply reply;
+    reply.answered = answer;
+    if (!answer) return reply;
+    for (const voxel::RayQuery& r : rays) {
+      const Eigen::Vector3f p = r.origin + r.direction.normalized() * r.initial_distance;
+      reply.hits.push_back({true, p + offset_every_other(reply.hits.size())});
+    }
+    return reply;
+  }
+  Eigen::Vector3f offset_every_other(std::size_t i) const {
+    return i % 2 == 1 || all_off ? offset : Eigen::Vector3f::Zero();
+  }
+  std::optional<MapDescription> map = indoor_map();
+  bool answer = true;
+  bool all_off = false;
+  Eigen::Vector3f offset = Eigen::Vector3f::Zero();
+  int calls = 0;
+  DurationNs last_timeout = 0;
+};
+
+struct StageScene {
+  test::Scene s = test::make_scene();
+  FeatureDatabase db;
+  std::vector<FeatureId> ids;
+  StageScene() {
+    test::add_points(s.state, 20, 0.0, 6, &db);
+    for (FeatureId id = 1; id <= 20; ++id) ids.push_back(id);
+  }
+};
+
+TEST(MapStage, AcceptsConsistentAnswersAndRefusesInconsistentOnes) {
+  StageScene sc;
+  const io::Trajectory none;
+  MapOptions o;
+  const MapStage stage(o, TriangulationOptions{}, &none);
+  FakeCloud cloud;
+  MapFrameStats st;
+  const auto points =
+      stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &st);
+  EXPECT_EQ(points.size(), 20u);
+  EXPECT_EQ(st.requests, 1);
+  EXPECT_EQ(st.answered, 1);
+  EXPECT_EQ(st.stage1_rays, 20);
+  EXPECT_EQ(st.stage1_hits, 20);
+  EXPECT_EQ(st.stage1_accepted, 20);
+  EXPECT_EQ(st.bytes_up, 20u * 32u);
+  EXPECT_EQ(st.bytes_down, 20u * 12u + 3u);  // points plus one hit bit per ray
+  EXPECT_LE(cloud.last_timeout, from_seconds(o.query_timeout_ms * 1e-3));
+  // Every other answer 5 cm across its ray: those are refused; at hit rate 0.5 the rule
+  // (0.7) keeps the unmatched features, at 0.4 it drops them.
+  cloud.offset = Eigen::Vector3f(0.0f, 0.0f, 0.05f);
+  MapFrameStats half;
+  EXPECT_EQ(stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &half)
+                .size(),
+            10u);
+  EXPECT_EQ(sc.ids.size(), 20u);
+  o.drop_unmatched_hit_rate = 0.4;
+  const MapStage dropping(o, TriangulationOptions{}, &none);
+  MapFrameStats dropped;
+  EXPECT_EQ(
+      dropping.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &dropped)
+          .size(),
+      10u);
+  EXPECT_EQ(dropped.stage1_dropped, 10);
+  EXPECT_EQ(sc.ids.size(), 10u);
+  // At most max_stage1_features rays.
+  o.max_stage1_features = 4;
+  MapFrameStats capped;
+  MapStage(o, TriangulationOptions{}, &none)
+      .associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &capped);
+  EXPECT_EQ(capped.stage1_rays, 4);
+}
+
+TEST(MapStage, WithoutAnAnswerTheFrameGoesOnWithoutMapPoints) {
+  StageScene sc;
+  const io::Trajectory none;
+  const MapStage stage(MapOptions{}, TriangulationOptions{}, &none);
+  FakeCloud cloud;
+  cloud.answer = false;
+  MapFrameStats st;
+  EXPECT_TRUE(stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &st)
+                  .empty());
+  EXPECT_EQ(st.timeouts, 1);
+  EXPECT_EQ(st.answered, 0);
+  EXPECT_EQ(sc.ids.size(), 20u);
+  // Past the frame's deadline nothing is sent at all.
+  cloud.answer = true;
+  const int calls = cloud.calls;
+  MapFrameStats late;
+  EXPECT_TRUE(
+      stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() - std::chrono::milliseconds(1), &late)
+          .empty());
+  EXPECT_EQ(cloud.calls, calls);
+  EXPECT_EQ(late.timeouts, 1);
+  // No map description yet (cloud not heard from): nothing either.
+  cloud.map.reset();
+  MapFrameStats unknown;
+  EXPECT_TRUE(
+      stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &unknown)
+          .empty());
+  EXPECT_FALSE(unknown.available);
+}
+
+TEST(MapStage, RegistersAcceptedHitsAsStatePointsWithTheMapVariance) {
+  StageScene sc;
+  const io::Trajectory none;
+  MapOptions o;
+  const MapStage stage(o, TriangulationOptions{}, &none);
+  FakeCloud cloud;
+  cloud.offset = Eigen::Vector3f(0.0f, 0.0f, 0.05f);  // every other one inconsistent
+  RegisteredMap grid(o.registered_voxel_m, o.registered_per_voxel);
+  const int dim = sc.s.state.dim();
+  MapFrameStats st;
+  const auto added =
+      stage.register_new(sc.s.state, sc.db, 1000, &grid, cloud, Clock::now() + std::chrono::seconds(1), &st);
+  ASSERT_FALSE(added.empty());
+  EXPECT_LE(added.size(), 10u);
+  EXPECT_EQ(st.registration_rays, 20);
+  EXPECT_EQ(grid.size(), added.size());
+  EXPECT_EQ(sc.s.state.dim(), dim + 3 * static_cast<int>(added.size()));
+  for (FeatureId id : added) {
+    EXPECT_EQ(id % 2, 1u) << "a consistent ray (even index, odd id)";
+    const PointState& p = sc.s.state.points.at(id);
+    EXPECT_TRUE(p.from_map);
+    const double var = map_point_variance(
+        o, make_feature_ray(sc.s.state, {}, *sc.db.find(id), p.p_w, indoor_map(), o)->ray.resolution);
+    EXPECT_NEAR(sc.s.state.P(p.slot.offset, p.slot.offset), var, 1e-12);
+    EXPECT_EQ(sc.s.state.P.block(p.slot.offset, 0, 3, p.slot.offset).norm(),
+              0.0);  // independent of the state
+  }
+  // All are seen at the newest clone: all suitable for stage 2.
+  EXPECT_EQ(stage.suitable(sc.s.state, sc.db, grid, 6000).size(), added.size());
+  EXPECT_TRUE(stage.suitable(sc.s.state, sc.db, grid, 99999).empty());
+}
+
+// ---- The two-stage update in process on a generated sequence ----
+
+test::SyntheticOptions mapped(double duration_s) {
+  test::SyntheticOptions so;
+  so.duration_s = duration_s;
+  so.map_spacing_m = 0.015;
+  so.preset = "realistic";
+  so.drift_px = 0.05;  // KLT-like drift: plain VIO drifts, the map holds it
+  return so;
+}
+
+/// config/euroc.yaml with deadlines no loaded test machine reaches (results must not depend
+/// on timing).
+EstimatorOptions untimed_options() {
+  EstimatorOptions o = test::euroc_estimator_options();
+  o.map.frame_budget_ms = o.map.query_timeout_ms = 10000.0;
+  return o;
+}
+
+TEST(TwoStageUpdate, TheMapCorrectsTheAlignmentErrorThatPlainVioKeeps) {
+  const test::SyntheticSequence* seq = test::synthetic_sequence(mapped(20.0));
+  ASSERT_NE(seq, nullptr);
+  auto map = test::LocalMapService::create(*seq);
+  ASSERT_NE(map, nullptr);
+  EstimatorOptions o = untimed_options();
+  o.alignment.translation_noise_mean_m = 0.08;  // a poor global pose at the start
+  o.alignment.translation_noise_sd_m = 0.0;
+  const auto plain = test::run_estimator(*seq, o);
+  std::vector<FrameOutput> outs;
+  const auto with_map = test::run_estimator(*seq, o, nullptr, map.get(), &outs);
+  ASSERT_EQ(with_map.size(), plain.size());
+  const double e_plain = test::ate_rmse(*seq, plain, false), e_map = test::ate_rmse(*seq, with_map, false);
+  RecordProperty("ate_plain_m", std::to_string(e_plain));
+  RecordProperty("ate_map_m", std::to_string(e_map));
+  EXPECT_GT(e_plain, 0.05);
+  EXPECT_LT(e_map, 0.5 * e_plain) << "plain " << e_plain << " map " << e_map;
+  int accepted = 0, registered = 0, rays_max = 0;
+  for (const FrameOutput& f : outs) {
+    accepted += f.map.stage1_accepted;
+    registered += f.map.registered;
+    rays_max = std::max(rays_max, f.map.stage1_rays + f.map.registration_rays);
+    EXPECT_EQ(f.map.timeouts, 0);
+  }
+  EXPECT_GT(accepted, 0);
+  EXPECT_GT(registered, 0);
+  EXPECT_LE(rays_max, o.map.max_rays_per_frame);
+}
+
+TEST(TwoStageUpdate, ASilentCloudGivesPlainVio) {
+  const test::SyntheticSequence* seq = test::synthetic_sequence(mapped(20.0));
+  ASSERT_NE(seq, nullptr);
+  auto map = test::LocalMapService::create(*seq);
+  ASSERT_NE(map, nullptr);
+  const EstimatorOptions o = untimed_options();
+  const auto plain = test::run_estimator(*seq, o);
+  const auto same_as_plain = [&](const io::Trajectory& t) {
+    ASSERT_EQ(t.size(), plain.size());
+    for (std::size_t i = 0; i < plain.size(); ++i) {
+      ASSERT_EQ(t[i].t_ns, plain[i].t_ns);
+      ASSERT_LT((t[i].T_w_b.translation() - plain[i].T_w_b.translation()).norm(), 1e-9) << i;
+    }
+  };
+  // Known map, no answers: every frame asks, times out and goes on as plain VIO.
+  map->answer = false;
+  std::vector<FrameOutput> outs;
+  same_as_plain(test::run_estimator(*seq, o, nullptr, map.get(), &outs));
+  int timeouts = 0, accepted = 0;
+  for (const FrameOutput& f : outs) timeouts += f.map.timeouts, accepted += f.map.stage1_accepted;
+  EXPECT_GT(timeouts, static_cast<int>(outs.size()) / 2);
+  EXPECT_EQ(accepted, 0);
+  EXPECT_GT(map->queries, 0);
+  // A cloud never heard from: nothing is sent.
+  map->announced = false;
+  map->queries = 0;
+  same_as_plain(test::run_estimator(*seq, o, nullptr, map.get()));
+  EXPECT_EQ(map->queries, 0);
+}
+
+}  // namespace
+}  // namespace mrvs::edge

@@ -1,0 +1,144 @@
+// edge_client against cloud_server over Fast DDS on loopback, as two processes (CTest runs in
+// a private network namespace when root): the paper's two-stage update on a short realistic
+// clip beats plain VIO, the link figures stay within the paper's budget, and a cloud killed
+// mid-run leaves a client that finishes as plain VIO and uses the map again after a restart.
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "mrvs/eval/trajectory_eval.h"
+#include "mrvs/io/trajectory_io.h"
+#include "mrvs/test/generated_sequence.h"
+#include "mrvs/test/run_tool.h"
+#include "mrvs/test/temp_dir.h"
+
+namespace mrvs::edge {
+namespace {
+
+namespace fs = std::filesystem;
+using mrvs::test::quoted;
+using mrvs::test::value_of;
+
+constexpr int kDomain = 93;  // neither the demo's (42) nor the link tests' (91)
+
+/// V1_01, 24 s from its still start, realistic preset; its map built once.
+struct MappedClip {
+  fs::path sequence;
+  fs::path map;
+};
+
+const MappedClip& clip() {
+  static const MappedClip c = [] {
+    MappedClip out;
+    // The survey at the simulator's own density (the unit-test sequences thin it out).
+    sim::GeneratorRequest request =
+        mrvs::test::indoor_sequence_request("V1_01_easy.txt", 0.0, 24.0, "realistic");
+    sim::SimulatorOptions dense = sim::default_options(sim::SceneProfile::kIndoor);
+    EXPECT_TRUE(sim::apply_preset("realistic", dense).ok());
+    request.options.map = dense.map;
+    auto p = mrvs::test::generated_sequence("vio_v101_24s_realistic_mapped", request);
+    EXPECT_TRUE(p.ok()) << p.status();
+    if (!p.ok()) return out;
+    out.sequence = *p;
+    out.map = *p / "map.mrvm";
+    if (!fs::exists(out.map)) {
+      const fs::path partial = *p / "map.mrvm.partial";
+      const auto r = mrvs::test::run_tool(
+          MRVS_MAP_BUILDER, "--input " + quoted(*p / "mav0/pointcloud0/data.ply") + " --config " +
+                                quoted(fs::path(MRVS_CONFIG_DIR) / "map_indoor.yaml") + " --out " +
+                                quoted(partial) + " --log-level warn");
+      EXPECT_EQ(r.exit_code, 0) << r.output;
+      if (r.exit_code == 0) fs::rename(partial, out.map);
+    }
+    return out;
+  }();
+  return c;
+}
+
+fs::path profile() { return fs::path(MRVS_SOURCE_DIR) / "config/dds/loopback.xml"; }
+
+std::unique_ptr<mrvs::test::BackgroundTool> start_server(const fs::path& log) {
+  return std::make_unique<mrvs::test::BackgroundTool>(
+      MRVS_CLOUD_SERVER,
+      "--map " + quoted(clip().map) + " --dds-profile " + quoted(profile()) + " --dds-domain " +
+          std::to_string(kDomain) + " --config " + quoted(fs::path(MRVS_CONFIG_DIR) / "map_indoor.yaml") +
+          " --stats-period 0 --log-level warn",
+      log);
+}
+
+mrvs::test::RunResult edge_client(const fs::path& out, const std::string& extra) {
+  return mrvs::test::run_tool(MRVS_EDGE_CLIENT, "--dataset " + quoted(clip().sequence) + " --config " +
+                                                    quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") +
+                                                    " --output " + quoted(out) +
+                                                    " --threads 1 --dds-profile " + quoted(profile()) +
+                                                    " --dds-domain " + std::to_string(kDomain) + " " + extra);
+}
+
+/// Unaligned ATE RMSE (m): with the map the estimate is in the map frame.
+double ate_raw(const fs::path& estimate) {
+  auto est = io::read_tum_trajectory(estimate);
+  auto gt = io::read_trajectory(clip().sequence / "mav0/state_groundtruth_estimate0/data.csv");
+  if (!est.ok() || !gt.ok()) return 1e9;
+  auto assoc = eval::associate(*est, *gt, eval::AssociationOptions{});
+  if (!assoc.ok()) return 1e9;
+  auto ate = eval::compute_ate(*assoc, eval::Alignment{});
+  return ate.ok() ? ate->position_m.rmse : 1e9;
+}
+
+TEST(EdgeClientMap, TheMapOverDdsBeatsPlainVioWithinThePaperBudget) {
+  ASSERT_FALSE(clip().map.empty());
+  const mrvs::test::TempDir dir;
+  const auto plain = edge_client(dir / "plain.txt", "--no-map --log-level warn --progress 0");
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  auto server = start_server(dir / "server.log");
+  const auto with_map = edge_client(dir / "map.txt", "--map-wait 20 --log-level warn --progress 0");
+  server->stop();
+  ASSERT_EQ(with_map.exit_code, 0) << with_map.output;
+  const double e_plain = ate_raw(dir / "plain.txt"), e_map = ate_raw(dir / "map.txt");
+  RecordProperty("ate_plain_m", std::to_string(e_plain));
+  RecordProperty("ate_map_m", std::to_string(e_map));
+  EXPECT_LT(e_map, 0.04);
+  EXPECT_LT(e_map, 0.8 * e_plain) << "plain " << e_plain << " map " << e_map;
+  // The link: answered, one ray per feature (at most 200), the paper's payload budget.
+  EXPECT_GT(value_of(with_map.output, "MAP_REQUESTS"), 100.0) << with_map.output;
+  EXPECT_LT(value_of(with_map.output, "FRAMES_WITHOUT_MAP"), 0.05 * value_of(with_map.output, "FRAMES"));
+  EXPECT_GT(value_of(with_map.output, "ACCEPTED_PER_FRAME"), 1.0);
+  EXPECT_LE(value_of(with_map.output, "RAYS_PER_FRAME_MAX"), 200.0);
+  EXPECT_LE(value_of(with_map.output, "PAYLOAD_BYTES_PER_FRAME_MAX"), 200.0 * 44.0 + 25.0);
+  EXPECT_GT(value_of(with_map.output, "RTT_MS_MEDIAN"), 0.0);
+  for (const char* key : {"D_SELECTION_MS_MEDIAN", "E_RAYS_MS_MEDIAN"}) {
+    EXPECT_GE(value_of(with_map.output, key), 0.0) << key;
+  }
+}
+
+TEST(EdgeClientMap, ACloudKilledMidRunLeavesPlainVioAndIsUsedAgainAfterARestart) {
+  ASSERT_FALSE(clip().map.empty());
+  const mrvs::test::TempDir dir;
+  auto server = start_server(dir / "server1.log");
+  mrvs::test::RunResult r;
+  std::thread client(
+      [&] { r = edge_client(dir / "traj.txt", "--map-wait 20 --log-level info --progress 2"); });
+  // The client processes 480 frames at several times the camera rate: the outage and the
+  // restart fall in its run.
+  std::this_thread::sleep_for(std::chrono::seconds(4));
+  server->kill_now();
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  server = start_server(dir / "server2.log");
+  client.join();
+  server->stop();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("no answer from the cloud"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the cloud answers again"), std::string::npos) << r.output;
+  const double frames = value_of(r.output, "FRAMES");
+  EXPECT_EQ(frames, 480.0);
+  EXPECT_GT(value_of(r.output, "FRAMES_WITHOUT_MAP"), 5.0);
+  EXPECT_LT(value_of(r.output, "FRAMES_WITHOUT_MAP"), 0.9 * frames);
+  EXPECT_GT(value_of(r.output, "POSES"), 0.9 * frames);
+  EXPECT_LT(ate_raw(dir / "traj.txt"), 0.08);
+}
+
+}  // namespace
+}  // namespace mrvs::edge
