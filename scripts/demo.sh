@@ -80,7 +80,8 @@ for k in RAYS_PER_FRAME ACCEPTED_PER_FRAME REGISTERED_PER_FRAME PAYLOAD_UP_BYTES
   printf '%-28s %12s\n' "$k" "$(value "$e" $k)"
 done
 plot=$out/trajectories.png
-python3 "$MRVS_ROOT/scripts/lib/plot_trajectories.py" "$plot" "$gt" "with map=$out/map/trajectory.txt" \
+# Debian's python (install_deps.sh installs its matplotlib), not a python earlier on PATH.
+"$(command -v /usr/bin/python3 || command -v python3)" "$MRVS_ROOT/scripts/lib/plot_trajectories.py" "$plot" "$gt" "with map=$out/map/trajectory.txt" \
     "plain VIO=$out/plain/trajectory.txt"
 requests=$(value "$e" MAP_REQUESTS)
 awk -v r="$requests" 'BEGIN { exit !(r > 0) }' || { echo "demo.sh: the client sent no map requests" >&2; exit 1; }
