@@ -15,9 +15,8 @@ double ms_since(MapStage::Clock::time_point t0) {
 
 }  // namespace
 
-MapStage::MapStage(const MapOptions& options, const TriangulationOptions& triangulation,
-                   const io::Trajectory* groundtruth)
-    : options_(options), triangulation_(triangulation), groundtruth_(groundtruth) {}
+MapStage::MapStage(const MapOptions& options, const TriangulationOptions& triangulation)
+    : options_(options), triangulation_(triangulation) {}
 
 std::vector<voxel::RayHit> MapStage::query(MapService& service, const std::vector<FeatureRay>& rays,
                                            TimestampNs stamp_ns, Clock::time_point deadline,
@@ -47,6 +46,7 @@ std::vector<voxel::RayHit> MapStage::query(MapService& service, const std::vecto
 }
 
 std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const FeatureDatabase& db,
+                                                  const io::Trajectory& groundtruth,
                                                   std::vector<FeatureId>* ids, MapService& service,
                                                   Clock::time_point deadline, MapFrameStats* stats) const {
   std::map<FeatureId, MapPoint> out;
@@ -68,7 +68,7 @@ std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const Feat
     if (static_cast<int>(rays.size()) >= cap) break;
     const auto p = triangulate(clone_bearings(state, *t), triangulation_);
     if (!p.ok()) continue;
-    if (auto ray = make_feature_ray(state, *groundtruth_, *t, *p, *map, options_)) rays.push_back(*ray);
+    if (auto ray = make_feature_ray(state, groundtruth, *t, *p, *map, options_)) rays.push_back(*ray);
   }
   stats->stage1_rays = static_cast<int>(rays.size());
   const std::vector<voxel::RayHit> hits = query(service, rays, state.newest_clone_ns(), deadline, stats);
@@ -76,7 +76,7 @@ std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const Feat
     if (!hits[i].hit) continue;
     ++stats->stage1_hits;
     const Vec3d X = map->origin + hits[i].point.cast<double>();
-    if (!accept_hit(state, *groundtruth_, *db.find(rays[i].id), rays[i], X, options_)) continue;
+    if (!accept_hit(state, groundtruth, *db.find(rays[i].id), rays[i], X, options_)) continue;
     out[rays[i].id] = MapPoint{X, map_point_variance(options_, rays[i].ray.resolution)};
   }
   stats->stage1_accepted = static_cast<int>(out.size());
@@ -94,7 +94,8 @@ std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const Feat
   return out;
 }
 
-std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabase& db, TimestampNs t_ns,
+std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabase& db,
+                                              const io::Trajectory& groundtruth, TimestampNs t_ns,
                                               RegisteredMap* grid, MapService& service,
                                               Clock::time_point deadline, MapFrameStats* stats) const {
   std::vector<FeatureId> added;
@@ -109,7 +110,7 @@ std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabas
       continue;  // new stereo pairs
     const auto p = triangulate(clone_bearings(state, track), triangulation_);
     if (!p.ok() || !grid->has_room(*p)) continue;
-    if (auto ray = make_feature_ray(state, *groundtruth_, track, *p, *map, options_)) rays.push_back(*ray);
+    if (auto ray = make_feature_ray(state, groundtruth, track, *p, *map, options_)) rays.push_back(*ray);
   }
   stats->registration_rays = static_cast<int>(rays.size());
   const std::vector<voxel::RayHit> hits = query(service, rays, t_ns, deadline, stats);
@@ -119,7 +120,7 @@ std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabas
     ++stats->registration_hits;
     const Vec3d X = map->origin + hits[i].point.cast<double>();
     const FeatureTrack& track = *db.find(rays[i].id);
-    if (!accept_hit(state, *groundtruth_, track, rays[i], X, options_) || !grid->add(rays[i].id, X)) continue;
+    if (!accept_hit(state, groundtruth, track, rays[i], X, options_) || !grid->add(rays[i].id, X)) continue;
     // A landmark known from the map: its variance, independent of the state.
     PointState point;
     point.p_w = point.fej = X;

@@ -33,7 +33,7 @@ VioEstimator::VioEstimator(const EstimatorOptions& options, const config::Stereo
       initializer_(options.initializer, rig, noise_, options.propagator.gravity_mps2),
       msckf_(options.msckf, options.triangulation),
       points_(options.points, options.triangulation),
-      map_stage_(options.map, options.triangulation, &groundtruth_),
+      map_stage_(options.map, options.triangulation),
       registered_(options.map.registered_voxel_m, options.map.registered_per_voxel) {}
 
 StatusOr<VioEstimator> VioEstimator::create(const EstimatorOptions& options,
@@ -228,7 +228,8 @@ void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
   }
   // Stage 1: the MSCKF update, with the features' map points where the cloud has them.
   std::map<FeatureId, MapPoint> map_points;
-  if (use_map) map_points = map_stage_.associate(s, db_, &msckf_ids, *map_, deadline_, &out->map);
+  if (use_map)
+    map_points = map_stage_.associate(s, db_, groundtruth_, &msckf_ids, *map_, deadline_, &out->map);
   Clock::time_point t0 = Clock::now();
   out->msckf = msckf_.update(s, db_, msckf_ids, map_points, options_.map.stage1_mode == "msckf_nullspace");
   out->timing.msckf_ms = ms_since(t0);
@@ -263,7 +264,7 @@ void VioEstimator::update_points(const FeatureFrame& frame, const std::vector<Fe
   for (FeatureId id : removed) registered_.remove(id);
   out->points.removed = static_cast<int>(removed.size());
   if (use_map && options_.map.register_new_features) {
-    map_stage_.register_new(s, db_, frame.t_ns, &registered_, *map_, deadline_, &out->map);
+    map_stage_.register_new(s, db_, groundtruth_, frame.t_ns, &registered_, *map_, deadline_, &out->map);
   }
   for (const auto& [id, p] : s.points) {
     db_.keep_from(id, frame.t_ns);  // points keep only their newest observations

@@ -261,11 +261,11 @@ TEST(MapStage, AcceptsConsistentAnswersAndRefusesInconsistentOnes) {
   StageScene sc;
   const io::Trajectory none;
   MapOptions o;
-  const MapStage stage(o, TriangulationOptions{}, &none);
+  const MapStage stage(o, TriangulationOptions{});
   FakeCloud cloud;
   MapFrameStats st;
   const auto points =
-      stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &st);
+      stage.associate(sc.s.state, sc.db, none, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &st);
   EXPECT_EQ(points.size(), 20u);
   EXPECT_EQ(st.requests, 1);
   EXPECT_EQ(st.answered, 1);
@@ -279,36 +279,39 @@ TEST(MapStage, AcceptsConsistentAnswersAndRefusesInconsistentOnes) {
   // (0.7) keeps the unmatched features, at 0.4 it drops them.
   cloud.offset = Eigen::Vector3f(0.0f, 0.0f, 0.05f);
   MapFrameStats half;
-  EXPECT_EQ(stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &half)
-                .size(),
-            10u);
-  EXPECT_EQ(sc.ids.size(), 20u);
-  o.drop_unmatched_hit_rate = 0.4;
-  const MapStage dropping(o, TriangulationOptions{}, &none);
-  MapFrameStats dropped;
   EXPECT_EQ(
-      dropping.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &dropped)
+      stage.associate(sc.s.state, sc.db, none, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &half)
           .size(),
       10u);
+  EXPECT_EQ(sc.ids.size(), 20u);
+  o.drop_unmatched_hit_rate = 0.4;
+  const MapStage dropping(o, TriangulationOptions{});
+  MapFrameStats dropped;
+  EXPECT_EQ(dropping
+                .associate(sc.s.state, sc.db, none, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1),
+                           &dropped)
+                .size(),
+            10u);
   EXPECT_EQ(dropped.stage1_dropped, 10);
   EXPECT_EQ(sc.ids.size(), 10u);
   // At most max_stage1_features rays.
   o.max_stage1_features = 4;
   MapFrameStats capped;
-  MapStage(o, TriangulationOptions{}, &none)
-      .associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &capped);
+  MapStage(o, TriangulationOptions{})
+      .associate(sc.s.state, sc.db, none, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &capped);
   EXPECT_EQ(capped.stage1_rays, 4);
 }
 
 TEST(MapStage, WithoutAnAnswerTheFrameGoesOnWithoutMapPoints) {
   StageScene sc;
   const io::Trajectory none;
-  const MapStage stage(MapOptions{}, TriangulationOptions{}, &none);
+  const MapStage stage(MapOptions{}, TriangulationOptions{});
   FakeCloud cloud;
   cloud.answer = false;
   MapFrameStats st;
-  EXPECT_TRUE(stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &st)
-                  .empty());
+  EXPECT_TRUE(
+      stage.associate(sc.s.state, sc.db, none, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &st)
+          .empty());
   EXPECT_EQ(st.timeouts, 1);
   EXPECT_EQ(st.answered, 0);
   EXPECT_EQ(sc.ids.size(), 20u);
@@ -316,17 +319,19 @@ TEST(MapStage, WithoutAnAnswerTheFrameGoesOnWithoutMapPoints) {
   cloud.answer = true;
   const int calls = cloud.calls;
   MapFrameStats late;
-  EXPECT_TRUE(
-      stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() - std::chrono::milliseconds(1), &late)
-          .empty());
+  EXPECT_TRUE(stage
+                  .associate(sc.s.state, sc.db, none, &sc.ids, cloud,
+                             Clock::now() - std::chrono::milliseconds(1), &late)
+                  .empty());
   EXPECT_EQ(cloud.calls, calls);
   EXPECT_EQ(late.timeouts, 1);
   // No map description yet (cloud not heard from): nothing either.
   cloud.map.reset();
   MapFrameStats unknown;
-  EXPECT_TRUE(
-      stage.associate(sc.s.state, sc.db, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &unknown)
-          .empty());
+  EXPECT_TRUE(stage
+                  .associate(sc.s.state, sc.db, none, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1),
+                             &unknown)
+                  .empty());
   EXPECT_FALSE(unknown.available);
 }
 
@@ -334,14 +339,14 @@ TEST(MapStage, RegistersAcceptedHitsAsStatePointsWithTheMapVariance) {
   StageScene sc;
   const io::Trajectory none;
   MapOptions o;
-  const MapStage stage(o, TriangulationOptions{}, &none);
+  const MapStage stage(o, TriangulationOptions{});
   FakeCloud cloud;
   cloud.offset = Eigen::Vector3f(0.0f, 0.0f, 0.05f);  // every other one inconsistent
   RegisteredMap grid(o.registered_voxel_m, o.registered_per_voxel);
   const int dim = sc.s.state.dim();
   MapFrameStats st;
-  const auto added =
-      stage.register_new(sc.s.state, sc.db, 1000, &grid, cloud, Clock::now() + std::chrono::seconds(1), &st);
+  const auto added = stage.register_new(sc.s.state, sc.db, none, 1000, &grid, cloud,
+                                        Clock::now() + std::chrono::seconds(1), &st);
   ASSERT_FALSE(added.empty());
   EXPECT_LE(added.size(), 10u);
   EXPECT_EQ(st.registration_rays, 20);
@@ -408,6 +413,13 @@ TEST(TwoStageUpdate, TheMapCorrectsTheAlignmentErrorThatPlainVioKeeps) {
   EXPECT_GT(accepted, 0);
   EXPECT_GT(registered, 0);
   EXPECT_LE(rays_max, o.map.max_rays_per_frame);
+  // Rays from the ground-truth poses (the paper's "w/ GT" rows) do at least as well.
+  o.map.query_pose_source = "gt";
+  const auto with_gt = test::run_estimator(*seq, o, nullptr, map.get());
+  ASSERT_EQ(with_gt.size(), plain.size());
+  const double e_gt = test::ate_rmse(*seq, with_gt, false);
+  RecordProperty("ate_gt_queries_m", std::to_string(e_gt));
+  EXPECT_LT(e_gt, 0.5 * e_plain) << "plain " << e_plain << " w/ GT " << e_gt;
 }
 
 TEST(TwoStageUpdate, ASilentCloudGivesPlainVio) {

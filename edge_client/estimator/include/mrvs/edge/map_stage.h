@@ -42,21 +42,22 @@ class MapStage {
  public:
   using Clock = std::chrono::steady_clock;
 
-  /// `groundtruth` is only read for query_pose_source gt.
-  MapStage(const MapOptions& options, const TriangulationOptions& triangulation,
-           const io::Trajectory* groundtruth);
+  MapStage(const MapOptions& options, const TriangulationOptions& triangulation);
 
   /// Stage 1 on the MSCKF candidates `ids` (at most max_stage1_features, the most observed):
   /// the accepted map points; the unmatched ids are removed from `ids` when the frame's hit
   /// rate reaches drop_unmatched_hit_rate.
+  /// `groundtruth` is only read for query_pose_source gt (here and in register_new).
   std::map<FeatureId, MapPoint> associate(const State& state, const FeatureDatabase& db,
-                                          std::vector<FeatureId>* ids, MapService& service,
-                                          Clock::time_point deadline, MapFrameStats* stats) const;
+                                          const io::Trajectory& groundtruth, std::vector<FeatureId>* ids,
+                                          MapService& service, Clock::time_point deadline,
+                                          MapFrameStats* stats) const;
 
   /// Stage 2 registration of the features first seen at clone t_ns (stereo pairs): accepted
   /// hits enter the state as points with the map's variance, while there is room in the
   /// state and in `grid`; returns their ids.
-  std::vector<FeatureId> register_new(State& state, const FeatureDatabase& db, TimestampNs t_ns,
+  std::vector<FeatureId> register_new(State& state, const FeatureDatabase& db,
+                                      const io::Trajectory& groundtruth, TimestampNs t_ns,
                                       RegisteredMap* grid, MapService& service, Clock::time_point deadline,
                                       MapFrameStats* stats) const;
 
@@ -75,7 +76,6 @@ class MapStage {
 
   MapOptions options_;
   TriangulationOptions triangulation_;
-  const io::Trajectory* groundtruth_;
 };
 
 }  // namespace mrvs::edge
