@@ -143,6 +143,7 @@ struct Report {
   std::vector<double> rays, hits, accepted, registered, bytes_up, bytes_down, rtt_ms;
   int frames = 0, skipped = 0, initialized_at = -1, points_max = 0, frames_without_map = 0, requests = 0,
       timeouts = 0;
+  double frame_interval_ms = 0.0;  ///< median image interval of the dataset (the frame's real-time budget)
   mrvs::io::Trajectory trajectory;
 };
 
@@ -159,6 +160,7 @@ double mean(const std::vector<double>& v) {
 void print_report(const Report& r, double wall_s) {
   fmt::print("FRAMES: {}\nFRAMES_SKIPPED: {}\nINITIALIZED_AT_FRAME: {}\nPOSES: {}\n", r.frames, r.skipped,
              r.initialized_at, r.trajectory.size());
+  fmt::print("FRAME_INTERVAL_MS: {:.3f}\n", r.frame_interval_ms);
   fmt::print("WALL_S: {:.2f}\nRATE_FPS: {:.1f}\nPOINTS_IN_STATE_MAX: {}\n", wall_s,
              r.frames / std::max(wall_s, 1e-9), r.points_max);
   print_ms("A_IMAGE", r.image_ms);
@@ -261,6 +263,10 @@ bool process(const Args& a, const mrvs::io::DatasetReader& reader, mrvs::edge::V
   const auto& frames = reader.stereo_frames();
   const std::size_t n =
       a.frames > 0 ? std::min<std::size_t>(static_cast<std::size_t>(a.frames), frames.size()) : frames.size();
+  std::vector<double> intervals;
+  for (std::size_t k = 1; k < frames.size(); ++k)
+    intervals.push_back(1e-6 * static_cast<double>(frames[k].t_ns - frames[k - 1].t_ns));
+  report->frame_interval_ms = quantile(intervals, 0.5);
   const mrvs::DurationNs td = reader.calibration().cameras[0].time_offset_ns;
   std::size_t next_imu = 0;
   const auto t0 = std::chrono::steady_clock::now();

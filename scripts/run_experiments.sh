@@ -1,0 +1,133 @@
+#!/usr/bin/env bash
+# The paper's evaluation on generated data, one command. Installs what it needs and builds
+# first, then for each sequence and seed: generates it (realistic preset), builds its map,
+# runs edge_client plain (--no-map) and against cloud_server over Fast DDS on loopback (inside
+# a private network namespace when root) with the map, with ground-truth query poses and with
+# each fixed level; evaluates every trajectory; runs the two-host and 1.66 MB/s link
+# experiments when root; writes results/<date>/REPORT.md with tables and figures from the
+# result files (scripts/lib/make_report.py).
+#
+# Usage: scripts/run_experiments.sh [--quick] [--out DIR] [--seeds "1 2 3"] [--data DIR]
+#   --quick   one 30 s indoor sequence (V1_01_easy), one seed, loopback link only
+#             (about 5 minutes here once built)
+#   default   every trajectory in ../shared/data/euroc_groundtruth/ full length plus the outdoor
+#             profile on a 2.2 km route, seeds 1 2 3 (hours on this machine)
+#   --data    where the generated sequences and maps go (default OUT/data); a sequence folder
+#             <name>_seed<N> already there is used as it is
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
+
+quick=false
+out=""
+seeds=""
+data=""
+while [[ $# -gt 0 ]]; do
+  case $1 in
+    --quick) quick=true; shift ;;
+    --out) out=${2:?--out needs a folder}; shift 2 ;;
+    --seeds) seeds=${2:?--seeds needs a list}; shift 2 ;;
+    --data) data=${2:?--data needs a folder}; shift 2 ;;
+    -h|--help) sed -n '2,16p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    *) echo "run_experiments.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+shared=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}
+[[ -d $shared/data/euroc_groundtruth ]] || { echo "run_experiments.sh: missing $shared/data/euroc_groundtruth" >&2; exit 1; }
+out=${out:-$MRVS_ROOT/results/$(date -u +%Y-%m-%d)$($quick && echo -quick)}
+if $quick; then seeds=${seeds:-1}; else seeds=${seeds:-"1 2 3"}; fi
+
+mrvs_build --target dataset_simulator evaluate_trajectory map_builder cloud_server edge_client link_probe
+bin=$MRVS_BUILD/bin
+data=${data:-$out/data}
+mkdir -p "$out/runs" "$data"
+started=$SECONDS
+
+# sequences: name profile trajectory-or-route duration
+sequences=()
+if $quick; then
+  sequences+=("V1_01_easy indoor $shared/data/euroc_groundtruth/V1_01_easy.txt 30")
+else
+  for f in "$shared"/data/euroc_groundtruth/*.txt; do sequences+=("$(basename "$f" .txt) indoor $f 0"); done
+  sequences+=("outdoor outdoor - 0")
+fi
+
+in_netns() {  # runs "$@" in a private network namespace when root (nothing leaves the machine)
+  if [[ $(id -u) -eq 0 ]] && command -v unshare >/dev/null; then
+    unshare -n bash -c 'ip link set lo up && exec "$@"' in_netns "$@"
+  else
+    "$@"
+  fi
+}
+
+run_variant() {  # run_variant SEQ_DIR MAP RESULT_DIR CONFIG MAP_CONFIG VARIANT [edge args...]
+  local seq=$1 map=$2 dir=$3 config=$4 map_config=$5 variant=$6
+  shift 6
+  mkdir -p "$dir"
+  if [[ $variant == plain ]]; then
+    echo "edge_client --dataset $seq --config $config --no-map --threads 1 $*" >"$dir/command.txt"
+    "$bin/edge_client" --dataset "$seq" --config "$config" --output "$dir/trajectory.txt" --no-map --threads 1 \
+        --log-level warn --progress 0 "$@" >"$dir/edge.txt"
+  else
+    echo "scripts/lib/map_run.sh $map $seq OUT $config $map_config $*" >"$dir/command.txt"
+    in_netns "$MRVS_ROOT/scripts/lib/map_run.sh" "$map" "$seq" "$dir" "$config" "$map_config" \
+        --log-level warn --progress 0 "$@"
+  fi
+  "$bin/evaluate_trajectory" --est "$dir/trajectory.txt" --gt "$seq/mav0/state_groundtruth_estimate0/data.csv" \
+      --align se3 --log-level warn >"$dir/eval.txt"
+  printf '  %-22s ATE %s m (SE3 %s m)\n' "$variant" "$(awk '$1 == "ATE_RMSE_m:" {print $2}' "$dir/eval.txt")" \
+      "$(awk '$1 == "ATE_RMSE_SE3_m:" {print $2}' "$dir/eval.txt")"
+}
+
+for entry in "${sequences[@]}"; do
+  read -r name profile source duration <<<"$entry"
+  if [[ $profile == indoor ]]; then
+    config=$MRVS_ROOT/config/euroc.yaml map_config=$MRVS_ROOT/config/map_indoor.yaml
+    gen=(--trajectory "$source" --profile indoor)
+  else
+    config=$MRVS_ROOT/config/kaist.yaml map_config=$MRVS_ROOT/config/map_outdoor.yaml
+    # 2.2 km: five straights joined by four tight turns (left, left, right, right)
+    gen=(--profile outdoor --set "route.straight_lengths_m=[500,400,500,400,300]"
+         --set "route.turn_directions=[-1,-1,1,1]" --set "route.turn_radii_m=[18,18,18,18]")
+  fi
+  [[ $duration == 0 ]] || gen+=(--duration "$duration")
+  for seed in $seeds; do
+    seq=$data/${name}_seed$seed
+    step "$name, seed $seed: generate, build the map ($((SECONDS - started)) s so far)"
+    [[ -d $seq/mav0 ]] || "$bin/dataset_simulator" "${gen[@]}" --preset realistic --seed "$seed" --out "$seq" \
+        --log-level warn
+    [[ -f $seq.mrvm && -f $seq.map_builder.txt ]] || "$bin/map_builder" --input "$seq/mav0/pointcloud0/data.ply" --config "$map_config" \
+        --out "$seq.mrvm" --log-level warn >"$seq.map_builder.txt"
+    dir=$out/runs/$name/seed$seed
+    mkdir -p "$dir"
+    echo "$seq/mav0/state_groundtruth_estimate0/data.csv" >"$dir/groundtruth.csv"
+    run_variant "$seq" "$seq.mrvm" "$dir/plain" "$config" "$map_config" plain
+    run_variant "$seq" "$seq.mrvm" "$dir/map" "$config" "$map_config" map
+    run_variant "$seq" "$seq.mrvm" "$dir/gt" "$config" "$map_config" gt --query-pose-source gt
+    [[ $profile == indoor ]] || continue  # outdoor: no level ablation (each run is minutes long)
+    for r in $(awk -F': ' '/^LEVEL_[0-9]+_RESOLUTION_M:/ {print $2}' "$seq.map_builder.txt"); do
+      run_variant "$seq" "$seq.mrvm" "$dir/fixed_$r" "$config" "$map_config" "fixed $r m" --fixed-resolution "$r"
+    done
+  done
+done
+
+if [[ $(id -u) -eq 0 ]] && ! $quick; then
+  step "link experiments (two hosts, 1.66 MB/s)"
+  mkdir -p "$out/link"
+  "$MRVS_ROOT/scripts/two_hosts.sh" --frames 600 >"$out/link/two_hosts.txt"
+  "$MRVS_ROOT/scripts/throttled_latency.sh" --frames 600 >"$out/link/two_hosts_1.66MBps.txt"
+fi
+
+{
+  echo "DATE: $(date -u +%Y-%m-%dT%H:%M:%SZ)"
+  echo "GIT_REVISION: $(git -C "$MRVS_ROOT" rev-parse --short HEAD)$(git -C "$MRVS_ROOT" diff --quiet || echo -dirty)"
+  echo "MODE: $($quick && echo quick || echo full)"
+  echo "SEEDS: ${seeds// /,}"
+  echo "FASTDDS: $(dpkg-query -W -f='${Version}' libfastrtps2.9 2>/dev/null || echo unknown)"
+  echo "COMPILER: $(c++ --version | head -1 | tr ' ' '_')"
+  echo "CPU_CORES: $(nproc)"
+  echo "WALL_S: $((SECONDS - started))"
+} >"$out/meta.txt"
+
+step "report"
+"$(command -v /usr/bin/python3 || command -v python3)" "$MRVS_ROOT/scripts/lib/make_report.py" "$out"
+echo "run_experiments: done in $((SECONDS - started)) s"
