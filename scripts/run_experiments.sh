@@ -82,9 +82,11 @@ for entry in "${sequences[@]}"; do
   read -r name profile source duration <<<"$entry"
   if [[ $profile == indoor ]]; then
     config=$MRVS_ROOT/config/euroc.yaml map_config=$MRVS_ROOT/config/map_indoor.yaml
+    export MRVS_MAP_WAIT=20
     gen=(--trajectory "$source" --profile indoor)
   else
     config=$MRVS_ROOT/config/kaist.yaml map_config=$MRVS_ROOT/config/map_outdoor.yaml
+    export MRVS_MAP_WAIT=180  # the server loads a 3 GB map first
     # 2.2 km: five straights joined by four tight turns (left, left, right, right)
     gen=(--profile outdoor --set "route.straight_lengths_m=[500,400,500,400,300]"
          --set "route.turn_directions=[-1,-1,1,1]" --set "route.turn_radii_m=[18,18,18,18]")

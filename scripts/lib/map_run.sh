@@ -6,6 +6,7 @@
 # private network namespace (unshare -n, lo up) when root.
 #
 # Usage: scripts/lib/map_run.sh MAP SEQUENCE OUT EDGE_CONFIG MAP_CONFIG [edge_client args...]
+# Environment: MRVS_MAP_WAIT (s the client waits for the map at start, default 20).
 set -euo pipefail
 [[ $# -ge 5 ]] || { sed -n '8p' "${BASH_SOURCE[0]}" >&2; exit 2; }
 map=$1 sequence=$2 out=$3 edge_config=$4 map_config=$5
@@ -30,7 +31,7 @@ trap 'exit 130' INT TERM
     --log-level warn >"$out/server.log" 2>&1 &
 server_pid=$!
 "$bin/edge_client" --dataset "$sequence" --config "$edge_config" --output "$out/trajectory.txt" \
-    --dds-profile "$profile" --map-wait 20 --threads 1 "$@" >"$out/edge.txt"
+    --dds-profile "$profile" --map-wait "${MRVS_MAP_WAIT:-20}" --threads 1 "$@" >"$out/edge.txt"
 stop_server
 server_pid=""
 grep -q '^REQUESTS_ANSWERED:' "$out/server.log" || { echo "map_run.sh: cloud_server did not stop cleanly:" >&2; cat "$out/server.log" >&2; exit 1; }

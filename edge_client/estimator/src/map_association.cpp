@@ -42,7 +42,7 @@ std::optional<FeatureRay> make_feature_ray(const State& state, const io::Traject
   out.focal_px = 0.5 * (model.fx() + model.fy());
   double r = o.fixed_resolution_m;
   if (r <= 0.0) {
-    const auto level = voxel::select_level(map.resolutions, out.depth_m, out.focal_px);
+    const auto level = voxel::select_level(map.resolutions, o.footprint_scale * out.depth_m, out.focal_px);
     if (!level) return std::nullopt;
     r = map.resolutions[*level];
   }

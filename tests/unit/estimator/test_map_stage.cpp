@@ -118,6 +118,11 @@ TEST(MapAssociation, TheRayGoesThroughTheNewestLeftObservation) {
   const auto level = voxel::select_level(map.resolutions, ray->depth_m, ray->focal_px);
   ASSERT_TRUE(level.has_value());
   EXPECT_FLOAT_EQ(ray->ray.resolution, static_cast<float>(map.resolutions[*level]));
+  // A larger footprint scale asks a coarser level: at this depth (about 4 m, f 458 px) the
+  // paper's rule picks 0.01 m, three times the footprint 0.03 m.
+  EXPECT_FLOAT_EQ(ray->ray.resolution, 0.01f);
+  o.footprint_scale = 3.0;
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.03f);
   o.fixed_resolution_m = 0.02;
   EXPECT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.02f);
   // Behind the camera: no ray.

@@ -19,6 +19,7 @@ namespace mrvs::edge {
 struct MapOptions : config::OptionsEquality<MapOptions> {
   bool enabled = true;              ///< false: plain VIO (the edge_client --no-map switch)
   double fixed_resolution_m = 0.0;  ///< > 0: every ray asks this level (ablation); 0: multi-resolution
+  double footprint_scale = 1.0;     ///< level for scale * depth / f (1: the paper's r* = argmin |r - d/f|)
   std::string stage1_mode = "known_landmark";   ///< known_landmark | msckf_nullspace (the reference code)
   std::string query_pose_source = "estimated";  ///< estimated | gt (the paper's "w/ GT" rows)
   int max_stage1_features = 100;                ///< co-visible features queried per frame
@@ -44,6 +45,7 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
     v("enabled", enabled, any(), "use the cloud map (false: plain VIO)");
     v("fixed_resolution_m", fixed_resolution_m, in_range(0.0, 10.0),
       "ask this level only (0: multi-resolution), m");
+    v("footprint_scale", footprint_scale, in_range(0.1, 100.0), "multi-resolution: level for scale * d / f");
     v("stage1_mode", stage1_mode, one_of({"known_landmark", "msckf_nullspace"}), "stage-1 use of map points");
     v("query_pose_source", query_pose_source, one_of({"estimated", "gt"}), "poses the rays are formed from");
     v("max_stage1_features", max_stage1_features, in_range(0, 256), "features queried in stage 1 per frame");
