@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Installs every package this project needs, from Debian 12's apt only.
 # Idempotent: prints nothing and exits 0 when everything is already present.
-# Usage: scripts/install_deps.sh [--print]   (--print lists the packages and exits)
+# Usage: scripts/install_deps.sh [--build-only | --containers] [--print]
+#   --build-only  only what compiling needs (no experiment tools; docker/Dockerfile's builder)
+#   --containers  also podman and what scripts/containers.sh needs (root only)
+#   --print       list the packages and exit
 set -euo pipefail
 
-PACKAGES=(
+BUILD_PACKAGES=(
   # toolchain
   cmake g++ ccache pkg-config git
   # middleware (Fast DDS 2.9 + code generator + CLI tools; fastcdr/fastrtps CMake configs need libssl-dev)
@@ -15,11 +18,25 @@ PACKAGES=(
   libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev libabsl-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
-  # experiment scripts
-  iproute2 nftables tshark python3 python3-numpy python3-matplotlib
 )
+# experiment scripts
+EXPERIMENT_PACKAGES=(iproute2 nftables tshark python3 python3-numpy python3-matplotlib)
+PACKAGES=("${BUILD_PACKAGES[@]}" "${EXPERIMENT_PACKAGES[@]}")
 
-if [[ "${1:-}" == "--print" ]]; then
+# scripts/containers.sh: podman as root with runc (containers.md), netavark networks, an offline
+# Debian base image (debootstrap) and the compose file (docker-compose on podman's Docker API).
+CONTAINER_PACKAGES=(podman runc netavark aardvark-dns iptables debootstrap docker-compose curl)
+
+print=0
+for arg in "$@"; do
+  case $arg in
+    --print) print=1 ;;
+    --build-only) PACKAGES=("${BUILD_PACKAGES[@]}") ;;
+    --containers) PACKAGES+=("${CONTAINER_PACKAGES[@]}") ;;
+    *) echo "install_deps.sh: unknown argument '$arg' (--build-only, --containers, --print)" >&2; exit 2 ;;
+  esac
+done
+if [[ $print == 1 ]]; then
   printf '%s\n' "${PACKAGES[@]}"
   exit 0
 fi
