@@ -8,16 +8,21 @@
 //   BM_GradientPyramid      3-level float pyramid + gradients of one image
 //   BM_SelectPixels/H       the DSO-style selector asked for 200 pixels on an empty mask,
 //                           starting from cell size H (0: the first frame's 3 px)
-// Environment: MRVS_BENCH_PRESET (easy | realistic, default easy).
+// The tracker runs with the `tracker` section of MRVS_BENCH_CONFIG (default config/euroc.yaml,
+// the options the edge client ships with), plus the overrides in MRVS_BENCH_SET
+// (space-separated, e.g. "tracker.klt_iterations=15 tracker.klt_window=9").
+// Environment: MRVS_BENCH_PRESET (easy | realistic, default easy), MRVS_BENCH_CONFIG, MRVS_BENCH_SET.
 #include <algorithm>
 #include <cstdlib>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 #include <opencv2/core/utility.hpp>
 
+#include "mrvs/config/options.h"
 #include "mrvs/core/stats.h"
 #include "mrvs/edge/feature_tracker.h"
 #include "mrvs/edge/pixel_selector.h"
@@ -32,6 +37,7 @@ using namespace mrvs;
 
 struct Bench {
   std::string error;
+  edge::TrackerOptions tracker;
   config::StereoRigCalibration rig;
   std::vector<std::array<cv::Mat, 2>> images;
   std::vector<TimestampNs> t_ns;
@@ -44,8 +50,22 @@ Bench failed(std::string error) {
   return b;
 }
 
+StatusOr<edge::TrackerOptions> tracker_options() {
+  const char* file = std::getenv("MRVS_BENCH_CONFIG");
+  const char* set = std::getenv("MRVS_BENCH_SET");
+  std::vector<std::string> overrides;
+  std::istringstream words(set != nullptr ? set : "");
+  for (std::string w; words >> w;) overrides.push_back(w);
+  return config::load_options_file<edge::TrackerOptions>(
+      file != nullptr ? std::string(file) : std::string(MRVS_SOURCE_DIR "/config/euroc.yaml"), "tracker",
+      overrides);
+}
+
 Bench build_bench() {
   Bench b;
+  StatusOr<edge::TrackerOptions> tracker = tracker_options();
+  if (!tracker.ok()) return failed(std::string(tracker.status().message()));
+  b.tracker = *tracker;
   sim::GeneratorRequest r;
   r.profile = sim::SceneProfile::kIndoor;
   r.trajectory = test::euroc_groundtruth_file("V1_01_easy.txt");
@@ -92,7 +112,7 @@ void BM_FrontendStereoFrame(benchmark::State& state) {
   for (auto _ : state) {
     if (!tracker || k == b.images.size()) {
       state.PauseTiming();
-      tracker.emplace(*edge::FeatureTracker::create(edge::TrackerOptions{}, b.rig));
+      tracker.emplace(*edge::FeatureTracker::create(b.tracker, b.rig));
       offset += k == b.images.size() ? b.t_ns.back() - b.t_ns.front() + 1 : 0;
       k = 0;
       state.ResumeTiming();
