@@ -51,6 +51,7 @@ trap 'exit 130' INT TERM
 step "1. podman, runc, debootstrap, docker-compose (apt)"
 ct_timed install "$MRVS_ROOT/scripts/install_deps.sh" --containers
 ct_configure_podman "$out/podman"
+ct_remove_stale
 ct_start_service "$out/podman"
 
 step "2. Debian 12 base image without a registry (debootstrap from $(ct_apt_mirror))"

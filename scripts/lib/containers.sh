@@ -132,8 +132,12 @@ ct_run() {
   [[ -n $server && -n $edge ]] || { cat "$out/compose_up.log" >&2; echo "containers.sh: containers not created" >&2; return 1; }
   echo "cloud_server: $server ($(podman inspect --format '{{range .NetworkSettings.Networks}}{{.IPAddress}}{{end}}' "$server"))"
   echo "edge_client:  $edge ($(podman inspect --format '{{range .NetworkSettings.Networks}}{{.IPAddress}}{{end}}' "$edge"))"
-  local code
-  code=$(timeout "$timeout" podman wait "$edge") || code=timeout
+  # Waited for in the background: the `wait` builtin lets Ctrl-C / SIGTERM reach the trap at once.
+  timeout "$timeout" podman wait "$edge" >"$out/edge_exit_code" 2>&1 &
+  CT_WAITER_PID=$!
+  local code=timeout
+  if wait "$CT_WAITER_PID"; then code=$(tail -n 1 "$out/edge_exit_code"); fi
+  CT_WAITER_PID=""
   podman stop -t 10 "$server" >/dev/null || true
   podman logs "$edge" >"$out/edge.txt" 2>"$out/edge.log" || true
   podman logs "$server" >"$out/server.log" 2>&1 || true
@@ -166,16 +170,33 @@ ct_report() {
 
 ct_value() { awk -v k="$2:" '$1 == k { print $2; exit }' "$1"; }
 
+# ct_remove_stale: the containers and networks of earlier runs whose script is gone (killed
+# before its trap ran): their fixed subnet would block this run.
+ct_remove_stale() {
+  local project pid
+  for project in $(podman network ls --format '{{.Labels}}' 2>/dev/null \
+                   | grep -oE 'com\.docker\.compose\.project=mrvs_ci_[0-9]+' | cut -d= -f2 | sort -u); do
+    pid=${project#mrvs_ci_}
+    kill -0 "$pid" 2>/dev/null && continue
+    echo "removing the leftovers of an earlier run ($project)"
+    ct_cleanup_project "$project"
+  done
+}
+
+# ct_cleanup_project PROJECT: removes the project's containers and networks.
+ct_cleanup_project() {
+  local ids
+  ids=$(podman ps -aq --filter "label=com.docker.compose.project=$1" 2>/dev/null) || ids=""
+  [[ -z $ids ]] || podman rm -f -t 5 $ids >/dev/null 2>&1 || true
+  podman network ls -q --filter "label=com.docker.compose.project=$1" 2>/dev/null \
+      | xargs -r podman network rm -f >/dev/null 2>&1 || true
+}
+
 # ct_cleanup PROJECT: removes the project's containers and network whatever state they are
 # in, and stops the API service (by PID).
 ct_cleanup() {
-  local project=$1 ids
-  if command -v podman >/dev/null; then
-    ids=$(podman ps -aq --filter "label=com.docker.compose.project=$project" 2>/dev/null) || ids=""
-    [[ -z $ids ]] || podman rm -f -t 5 $ids >/dev/null 2>&1 || true
-    podman network ls -q --filter "label=com.docker.compose.project=$project" 2>/dev/null \
-        | xargs -r podman network rm -f >/dev/null 2>&1 || true
-  fi
+  [[ -z ${CT_WAITER_PID:-} ]] || kill "$CT_WAITER_PID" 2>/dev/null || true
+  if command -v podman >/dev/null; then ct_cleanup_project "$1"; fi
   if [[ -n ${CT_SERVICE_PID:-} ]]; then
     kill -TERM "$CT_SERVICE_PID" 2>/dev/null && wait "$CT_SERVICE_PID" 2>/dev/null
     CT_SERVICE_PID=""
