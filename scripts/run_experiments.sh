@@ -7,13 +7,14 @@
 # experiments when root; writes results/<date>/REPORT.md with tables and figures from the
 # result files (scripts/lib/make_report.py).
 #
-# Usage: scripts/run_experiments.sh [--quick] [--out DIR] [--seeds "1 2 3"] [--data DIR]
+# Usage: scripts/run_experiments.sh [--quick] [--out DIR] [--seeds "1 2 3"] [--data DIR] [--sequences "A B"]
 #   --quick   one 30 s indoor sequence (V1_01_easy), one seed, loopback link only
 #             (about 5 minutes here once built)
 #   default   every trajectory in ../shared/data/euroc_groundtruth/ full length plus the outdoor
 #             profile on a 2.2 km route, seeds 1 2 3 (hours on this machine)
 #   --data    where the generated sequences and maps go (default OUT/data); a sequence folder
 #             <name>_seed<N> already there is used as it is
+#   --sequences  only these (names of the trajectories, e.g. "V1_02_medium V2_01_easy", or outdoor)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
 
@@ -21,13 +22,15 @@ quick=false
 out=""
 seeds=""
 data=""
+only=""
 while [[ $# -gt 0 ]]; do
   case $1 in
     --quick) quick=true; shift ;;
     --out) out=${2:?--out needs a folder}; shift 2 ;;
     --seeds) seeds=${2:?--seeds needs a list}; shift 2 ;;
     --data) data=${2:?--data needs a folder}; shift 2 ;;
-    -h|--help) sed -n '2,16p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    --sequences) only=${2:?--sequences needs names}; shift 2 ;;
+    -h|--help) sed -n '2,17p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "run_experiments.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -49,6 +52,16 @@ if $quick; then
 else
   for f in "$shared"/data/euroc_groundtruth/*.txt; do sequences+=("$(basename "$f" .txt) indoor $f 0"); done
   sequences+=("outdoor outdoor - 0")
+fi
+if [[ -n $only ]]; then
+  chosen=()
+  for name in $only; do
+    match=""
+    for entry in "${sequences[@]}"; do [[ ${entry%% *} == "$name" ]] && match=$entry; done
+    [[ -n $match ]] || { echo "run_experiments.sh: --sequences: no sequence '$name' (have: $(printf '%s ' "${sequences[@]%% *}"))" >&2; exit 2; }
+    chosen+=("$match")
+  done
+  sequences=("${chosen[@]}")
 fi
 
 in_netns() {  # runs "$@" in a private network namespace when root (nothing leaves the machine)
@@ -124,6 +137,7 @@ fi
   echo "GIT_REVISION: $(git -C "$MRVS_ROOT" rev-parse --short HEAD)$(git -C "$MRVS_ROOT" diff --quiet || echo -dirty)"
   echo "MODE: $($quick && echo quick || echo full)"
   echo "SEEDS: ${seeds// /,}"
+  echo "SEQUENCES: $(printf '%s ' "${sequences[@]%% *}")"
   echo "FASTDDS: $(dpkg-query -W -f='${Version}' libfastrtps2.9 2>/dev/null || echo unknown)"
   echo "COMPILER: $(c++ --version | head -1 | tr ' ' '_')"
   echo "CPU_CORES: $(nproc)"
