@@ -18,6 +18,7 @@
 # Environment: MRVS_SHARED_DIR (default ../shared), MRVS_BUILD_DIR.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
+source "$MRVS_ROOT/scripts/lib/link_experiment.sh"  # value
 source "$MRVS_ROOT/scripts/lib/containers.sh"
 
 duration=30 out=$MRVS_BUILD/containers binaries=prebuilt timeout=900 reuse=0

@@ -1,6 +1,7 @@
 # Sourced by scripts/containers.sh: podman set-up, the offline base image, the image builds,
 # the two-container run through docker/compose.yaml, its report and the clean-up.
-# Needs scripts/lib/build.sh sourced first (MRVS_ROOT, MRVS_BUILD, step).
+# Needs scripts/lib/build.sh (MRVS_ROOT, MRVS_BUILD, step) and scripts/lib/link_experiment.sh
+# (value) sourced first.
 
 CT_COMPOSE=$MRVS_ROOT/docker/compose.yaml
 CT_BASE_IMAGE=docker.io/library/debian:bookworm   # what `FROM debian:bookworm` resolves to
@@ -157,18 +158,16 @@ ct_report() {
   "$MRVS_BUILD/bin/evaluate_trajectory" --est "$traj" --gt "$data/sequence/mav0/state_groundtruth_estimate0/data.csv" \
       --align se3 --log-level warn >"$out/ate.txt"
   local k
-  for k in ATE_RMSE_m ATE_RMSE_SE3_m; do printf '%-30s %s\n' "$k" "$(ct_value "$out/ate.txt" "$k")"; done
+  for k in ATE_RMSE_m ATE_RMSE_SE3_m; do printf '%-30s %s\n' "$k" "$(value "$out/ate.txt" "$k")"; done
   for k in FRAMES RAYS_PER_FRAME ACCEPTED_PER_FRAME PAYLOAD_UP_BYTES_PER_FRAME PAYLOAD_DOWN_BYTES_PER_FRAME \
            RTT_MS_MEDIAN RTT_MS_P95 MAP_TIMEOUTS FRAMES_WITHOUT_MAP FRAME_MS_MEDIAN; do
-    printf '%-30s %s\n' "$k" "$(ct_value "$out/edge.txt" "$k")"
+    printf '%-30s %s\n' "$k" "$(value "$out/edge.txt" "$k")"
   done
   local answered
-  answered=$(ct_value "$out/server.log" REQUESTS_ANSWERED)
+  answered=$(value "$out/server.log" REQUESTS_ANSWERED)
   printf '%-30s %s\n' "server REQUESTS_ANSWERED" "${answered:-none}"
   [[ ${answered:-0} -gt 0 ]] || { echo "containers.sh: cloud_server answered no request (log: $out/server.log)" >&2; return 1; }
 }
-
-ct_value() { awk -v k="$2:" '$1 == k { print $2; exit }' "$1"; }
 
 # ct_remove_stale: the containers and networks of earlier runs whose script is gone (killed
 # before its trap ran): their fixed subnet would block this run.

@@ -162,7 +162,7 @@ def link_section(root, runs):
 
 
 def plots(root, runs):
-    """Trajectory/error plots for up to two sequences and the timing breakdown; their names."""
+    """Trajectory/error plots for up to two sequences (their last seed folder) and the timing breakdown; their names."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -178,14 +178,14 @@ def plots(root, runs):
         v = runs[seq]
         if "plain" not in v or "map" not in v:
             continue
-        gt_file = os.path.join(os.path.dirname(v["map"][0]["dir"]), "groundtruth.csv")
+        gt_file = os.path.join(os.path.dirname(v["map"][-1]["dir"]), "groundtruth.csv")
         gt = open(gt_file).read().strip() if os.path.isfile(gt_file) else ""
         if not os.path.isfile(gt):
             raise ReportError(f"{gt_file}: does not name an existing ground-truth file")
         name = f"trajectory_{seq}.png"
         plot_trajectories.main(["", os.path.join(root, name), gt,
-                                "with map=" + os.path.join(v["map"][0]["dir"], "trajectory.txt"),
-                                "plain VIO=" + os.path.join(v["plain"][0]["dir"], "trajectory.txt")])
+                                "with map=" + os.path.join(v["map"][-1]["dir"], "trajectory.txt"),
+                                "plain VIO=" + os.path.join(v["plain"][-1]["dir"], "trajectory.txt")])
         names.append(name)
     seqs = [s for s in runs if "map" in runs[s]]
     if seqs:
@@ -227,7 +227,8 @@ def main(argv):
         text += accuracy_tables(runs) + timing_table(runs) + link_section(root, runs)
         if "--no-plots" not in argv:
             figures = plots(root, runs)
-            text += "\n## Figures\n\n" + "".join(f"![{f}]({f})\n\n" for f in figures)
+            text += "\n## Figures\n\nTrajectories: the last seed folder of each sequence.\n\n"
+            text += "".join(f"![{f}]({f})\n\n" for f in figures)
         text += reproduce_section(root, runs)
     except ReportError as e:
         print(f"make_report.py: error: {e}", file=sys.stderr)
