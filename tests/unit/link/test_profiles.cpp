@@ -53,9 +53,12 @@ TEST_P(ShippedProfiles, WritersAndReadersHaveTheLinkQos) {
   EXPECT_EQ(writer.qos.m_publishMode.kind, eprosima::fastrtps::SYNCHRONOUS_PUBLISH_MODE);
   EXPECT_EQ(writer.qos.data_sharing.kind(), eprosima::fastdds::dds::OFF);
   EXPECT_EQ(writer.topic.historyQos.kind, eprosima::fastrtps::KEEP_LAST_HISTORY_QOS);
-  EXPECT_EQ(writer.topic.historyQos.depth, 4);
+  EXPECT_EQ(writer.topic.historyQos.depth, 16);
   eprosima::fastrtps::SubscriberAttributes reader;
   ASSERT_EQ(XMLProfileManager::fillSubscriberAttributes(kReaderProfile, reader, false), XMLP_ret::XML_OK);
+  // The reply topic is shared: a reader keeps its own reply while other clients' arrive.
+  EXPECT_EQ(reader.topic.historyQos.kind, eprosima::fastrtps::KEEP_LAST_HISTORY_QOS);
+  EXPECT_EQ(reader.topic.historyQos.depth, 16);
   EXPECT_EQ(reader.qos.data_sharing.kind(), eprosima::fastdds::dds::OFF);
   if (GetParam().fast_heartbeats) {
     EXPECT_EQ(writer.times.heartbeatPeriod.to_ns(), 10'000'000);
