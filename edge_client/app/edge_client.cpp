@@ -76,8 +76,9 @@ void add_options(CLI::App& app, Args& a) {
       ->check(CLI::Range(0.0, 10.0));
   app.add_option("--query-pose-source", a.query_pose_source, "estimated | gt (the paper's w/ GT rows)")
       ->check(CLI::IsMember({"estimated", "gt"}));
-  app.add_option("--stage1-mode", a.stage1_mode, "known_landmark | msckf_nullspace (the reference code)")
-      ->check(CLI::IsMember({"known_landmark", "msckf_nullspace"}));
+  app.add_option("--stage1-mode", a.stage1_mode,
+                 "known_landmark | msckf_nullspace (the reference code) | ray_depth")
+      ->check(CLI::IsMember({"known_landmark", "msckf_nullspace", "ray_depth"}));
   app.add_option("--groundtruth", a.groundtruth,
                  "Ground truth for the one-time alignment (TUM or EuRoC csv; default: the dataset's own)")
       ->check(CLI::ExistingFile);

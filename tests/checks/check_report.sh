@@ -2,8 +2,11 @@
 # scripts/lib/make_report.py fills its tables from the result files, not from typed-in
 # numbers: two result trees of random figures give two reports, each holding its own tree's
 # numbers in the right table; a missing result file is an error naming it.
+# check_report.sh ROOT OUT: instead, the report of a real run_experiments.sh run in OUT
+# (.ci/run's --quick run) holds the numbers of that run's result files, every sequence.
 set -uo pipefail
 root=$1
+tree=${2:-}
 py=$(command -v /usr/bin/python3 || command -v python3)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -64,6 +67,19 @@ if f"| {seq} | {rays:.1f} |" not in text:
     sys.exit(f"link table row of {seq} missing")
 PY
 }
+
+if [[ -n $tree ]]; then
+  [[ -f $tree/REPORT.md ]] || { echo "no report: $tree/REPORT.md"; exit 1; }
+  n=0
+  for d in "$tree"/runs/*/seed1; do
+    seq=$(basename "$(dirname "$d")")
+    expect_row "$tree/REPORT.md" "$tree" "$seq"
+    n=$((n + 1))
+  done
+  [[ $n -gt 0 ]] || { echo "no seed-1 runs under $tree/runs"; fail=1; }
+  [[ $fail -eq 0 ]] && echo "report of $tree: its $n sequence(s) filled from the run's result files"
+  exit $fail
+fi
 
 for seed in 1 2; do
   make_tree "$tmp/t$seed" "$seed"

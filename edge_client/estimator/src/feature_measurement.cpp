@@ -1,5 +1,6 @@
 #include "mrvs/edge/feature_measurement.h"
 
+#include <algorithm>
 #include <map>
 
 #include "mrvs/edge/camera_measurement.h"
@@ -35,6 +36,7 @@ std::vector<BearingObservation> clone_bearings(const State& state, const Feature
 StatusOr<FeatureRows> feature_rows(const State& state, const FeatureTrack& track, const Vec3d& p_w,
                                    const Vec3d& p_w_lin, double sigma_px) {
   std::vector<const CameraObservation*> used;
+  std::vector<std::pair<TimestampNs, int>> out_used;
   Columns cols;
   for (const CameraObservation& o : track.obs) {
     const auto it = state.clones.find(o.t_ns);
@@ -42,6 +44,7 @@ StatusOr<FeatureRows> feature_rows(const State& state, const FeatureTrack& track
     const CameraState& cam = state.cams[static_cast<std::size_t>(o.cam)];
     if (!project_point(it->second.T_w_b, cam.T_b_c, *cam.model, p_w)) continue;
     used.push_back(&o);
+    out_used.emplace_back(o.t_ns, o.cam);
     cols.add(it->second.slot);
     cols.add(cam.extrinsic_slot);
     cols.add(cam.intrinsic_slot);
@@ -57,6 +60,7 @@ StatusOr<FeatureRows> feature_rows(const State& state, const FeatureTrack& track
   out.m.sigma = sigma_px;
   out.H_f.resize(rows, 3);
   out.observations = static_cast<int>(used.size());
+  out.used = std::move(out_used);
   const bool fej = state.options().use_fej;
   for (std::size_t k = 0; k < used.size(); ++k) {
     const CameraObservation& o = *used[k];
@@ -75,6 +79,80 @@ StatusOr<FeatureRows> feature_rows(const State& state, const FeatureTrack& track
     out.H_f.block<2, 3>(row, 0) = J.point;
   }
   return out;
+}
+
+std::optional<Vec3d> anchored_point(const State& state, const RayAnchor& anchor) {
+  if (state.clones.count(anchor.t_ns) == 0) return std::nullopt;
+  return state.T_w_c(anchor.t_ns, anchor.cam) * anchor.p_c;
+}
+
+std::optional<AnchorJacobian> anchor_jacobian(const State& state, const RayAnchor& anchor) {
+  const auto it = state.clones.find(anchor.t_ns);
+  if (it == state.clones.end()) return std::nullopt;
+  // R_w_b <- R_w_b Exp(dtheta), R_b_c <- R_b_c Exp(dtheta_c) for the point fixed in the
+  // camera, then only across the ray: along it the map's surface holds the point (taken as
+  // facing the camera), wherever the camera is.
+  const CloneState& clone = it->second;
+  const CameraState& cam = state.cams[static_cast<std::size_t>(anchor.cam)];
+  const Mat3d R_w_b = clone.T_w_b.rotation_matrix();
+  const Vec3d v = (R_w_b * cam.T_b_c.rotation_matrix() * anchor.p_c).normalized();
+  const Mat3d across = Mat3d::Identity() - v * v.transpose();
+  AnchorJacobian out;
+  out.vars.push_back(clone.slot);
+  if (cam.extrinsic_slot.active()) out.vars.push_back(cam.extrinsic_slot);
+  out.J = Eigen::MatrixXd::Zero(3, 6 * static_cast<int>(out.vars.size()));
+  out.J.block<3, 3>(0, 0) = -across * R_w_b * skew(Vec3d(cam.T_b_c * anchor.p_c));
+  out.J.block<3, 3>(0, 3) = across;
+  if (cam.extrinsic_slot.active()) {
+    out.J.block<3, 3>(0, 6) = -across * R_w_b * cam.T_b_c.rotation_matrix() * skew(anchor.p_c);
+    out.J.block<3, 3>(0, 9) = across * R_w_b;
+  }
+  return out;
+}
+
+Mat3d anchored_covariance(const State& state, const RayAnchor& anchor, double depth_variance,
+                          double sigma_px) {
+  const SE3d T_w_c = state.T_w_c(anchor.t_ns, anchor.cam);
+  const Vec3d v = (T_w_c.rotation_matrix() * anchor.p_c).normalized();
+  const auto& model = *state.cams[static_cast<std::size_t>(anchor.cam)].model;
+  const double across = anchor.p_c.norm() * sigma_px / (0.5 * (model.fx() + model.fy()));
+  const Mat3d vv = v * v.transpose();
+  return depth_variance * vv + across * across * (Mat3d::Identity() - vv);
+}
+
+StatusOr<FeatureRows> anchored_feature_rows(const State& state, const FeatureTrack& track,
+                                            const RayAnchor& anchor, double sigma_px) {
+  const std::optional<Vec3d> p_w = anchored_point(state, anchor);
+  const std::optional<AnchorJacobian> aj = anchor_jacobian(state, anchor);
+  if (!p_w || !aj) return absl::FailedPreconditionError("the anchor clone has left the window");
+  StatusOr<FeatureRows> rows = feature_rows(state, track, *p_w, *p_w, sigma_px);
+  if (!rows.ok()) return rows.status();
+  const auto self = std::find(rows->used.begin(), rows->used.end(), std::make_pair(anchor.t_ns, anchor.cam));
+  if (self == rows->used.end())
+    return absl::FailedPreconditionError("the anchor observation is not in the track");
+  // The anchor's slots are among the rows' (its own observation put them there).
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, rows->m.H.cols());
+  int col = 0;
+  for (const Slot& s : rows->m.vars) {
+    for (std::size_t k = 0; k < aj->vars.size(); ++k) {
+      if (aj->vars[k].offset == s.offset)
+        J.middleCols(col, s.size) = aj->J.middleCols(6 * static_cast<int>(k), 6);
+    }
+    col += s.size;
+  }
+  rows->m.H += rows->H_f * J;
+  // Without the anchor's own pair of rows (it defines the direction of the point).
+  const int k = 2 * static_cast<int>(self - rows->used.begin()), n = rows->m.rows();
+  const int tail = n - k - 2;
+  rows->m.H.middleRows(k, tail) = rows->m.H.bottomRows(tail).eval();
+  rows->m.r.segment(k, tail) = rows->m.r.tail(tail).eval();
+  rows->H_f.middleRows(k, tail) = rows->H_f.bottomRows(tail).eval();
+  rows->m.H.conservativeResize(n - 2, Eigen::NoChange);
+  rows->m.r.conservativeResize(n - 2);
+  rows->H_f.conservativeResize(n - 2, Eigen::NoChange);
+  rows->used.erase(self);
+  --rows->observations;
+  return rows;
 }
 
 }  // namespace mrvs::edge

@@ -1,9 +1,13 @@
 #include "mrvs/edge/map_association.h"
 
 #include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
 
 #include "mrvs/edge/camera_measurement.h"
 #include "mrvs/edge/global_alignment.h"
+#include "mrvs/edge/state_helper.h"
 #include "mrvs/voxel/resolution.h"
 
 namespace mrvs::edge {
@@ -19,6 +23,18 @@ std::optional<SE3d> query_camera_pose(const State& state, const io::Trajectory& 
   const auto it = state.clones.find(t_ns);
   if (it == state.clones.end()) return std::nullopt;
   return it->second.T_w_b * T_b_c;
+}
+
+Mat3d hit_covariance_across(const State& state, const RayAnchor& anchor) {
+  const std::optional<AnchorJacobian> aj = anchor_jacobian(state, anchor);
+  if (!aj) return Mat3d::Zero();
+  return aj->J * marginal_covariance(state, aj->vars) * aj->J.transpose();
+}
+
+double hit_sigma_across(const State& state, const RayAnchor& anchor) {
+  const Eigen::SelfAdjointEigenSolver<Mat3d> eig(hit_covariance_across(state, anchor),
+                                                 Eigen::EigenvaluesOnly);
+  return std::sqrt(std::max(eig.eigenvalues()(2), 0.0));
 }
 
 std::optional<FeatureRay> make_feature_ray(const State& state, const io::Trajectory& gt,
@@ -42,8 +58,12 @@ std::optional<FeatureRay> make_feature_ray(const State& state, const io::Traject
   out.focal_px = 0.5 * (model.fx() + model.fy());
   double r = o.fixed_resolution_m;
   if (r <= 0.0) {
-    const auto level = voxel::select_level(map.resolutions, o.footprint_scale * out.depth_m, out.focal_px);
+    auto level = voxel::select_level(map.resolutions, o.footprint_scale * out.depth_m, out.focal_px);
     if (!level) return std::nullopt;
+    if (o.uncertainty_scale > 0.0 && o.query_pose_source != "gt") {
+      const double need = o.uncertainty_scale * hit_sigma_across(state, RayAnchor{obs->t_ns, 0, p_c});
+      while (*level + 1 < map.resolutions.size() && map.resolutions[*level] < need) ++*level;
+    }
     r = map.resolutions[*level];
   }
   const Vec3d c = T_w_c->translation();
@@ -79,6 +99,18 @@ bool accept_hit(const State& state, const io::Trajectory& gt, const FeatureTrack
       std::clamp(ray.ray.resolution * ray.focal_px / std::max(z, 0.05) + o.threshold_offset_px - 0.5,
                  o.threshold_lower_px, o.threshold_upper_px);
   return mean < thr;
+}
+
+std::optional<RayAnchor> ray_anchor(const State& state, const FeatureTrack& track, const FeatureRay& ray,
+                                    const Vec3d& X) {
+  if (state.clones.count(ray.t_ns) == 0) return std::nullopt;
+  const auto obs = std::find_if(track.obs.begin(), track.obs.end(), [&](const CameraObservation& c) {
+    return c.t_ns == ray.t_ns && c.cam == ray.cam;
+  });
+  if (obs == track.obs.end()) return std::nullopt;
+  const double z = (state.T_w_c(ray.t_ns, ray.cam).inverse() * X).z();
+  if (!(z > 0.05)) return std::nullopt;
+  return RayAnchor{ray.t_ns, ray.cam, z * Vec3d(obs->xn.x(), obs->xn.y(), 1.0)};
 }
 
 }  // namespace mrvs::edge

@@ -18,6 +18,26 @@ double ms_since(MapStage::Clock::time_point t0) {
 MapStage::MapStage(const MapOptions& options, const TriangulationOptions& triangulation)
     : options_(options), triangulation_(triangulation) {}
 
+void MapStage::add_registered_point(State& state, const FeatureTrack& track, const FeatureRay& ray,
+                                    const Vec3d& X, TimestampNs t_ns) const {
+  // A landmark known from the map: its variance (plus the association's), independent of the
+  // state. (Anchoring it on
+  // its ray like ray_depth's stage-1 points, correlated with the query clone, was measured
+  // worse: the registered points then no longer hold the pose where it was; see README.)
+  Mat3d covariance = Mat3d::Identity() * map_point_variance(options_, ray.ray.resolution);
+  if (options_.association_noise) {
+    if (const std::optional<RayAnchor> anchor = ray_anchor(state, track, ray, X))
+      covariance += hit_covariance_across(state, *anchor);
+  }
+  PointState point;
+  point.p_w = point.fej = X;
+  point.slot = state.append(3);
+  state.P.block<3, 3>(point.slot.offset, point.slot.offset) = covariance;
+  point.added_ns = t_ns;
+  point.from_map = true;
+  state.points.emplace(track.id, point);
+}
+
 std::vector<voxel::RayHit> MapStage::query(MapService& service, const std::vector<FeatureRay>& rays,
                                            TimestampNs stamp_ns, Clock::time_point deadline,
                                            MapFrameStats* stats) const {
@@ -76,8 +96,13 @@ std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const Feat
     if (!hits[i].hit) continue;
     ++stats->stage1_hits;
     const Vec3d X = map->origin + hits[i].point.cast<double>();
-    if (!accept_hit(state, groundtruth, *db.find(rays[i].id), rays[i], X, options_)) continue;
-    out[rays[i].id] = MapPoint{X, map_point_variance(options_, rays[i].ray.resolution)};
+    const FeatureTrack& track = *db.find(rays[i].id);
+    if (!accept_hit(state, groundtruth, track, rays[i], X, options_)) continue;
+    MapPoint& point = out[rays[i].id];
+    point = MapPoint{X, map_point_variance(options_, rays[i].ray.resolution),
+                     ray_anchor(state, track, rays[i], X), Mat3d::Zero()};
+    if (options_.association_noise && point.anchor)
+      point.association = hit_covariance_across(state, *point.anchor);
   }
   stats->stage1_accepted = static_cast<int>(out.size());
   // The reference code's rule: with most features on the map, the others are suspect.
@@ -121,15 +146,7 @@ std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabas
     const Vec3d X = map->origin + hits[i].point.cast<double>();
     const FeatureTrack& track = *db.find(rays[i].id);
     if (!accept_hit(state, groundtruth, track, rays[i], X, options_) || !grid->add(rays[i].id, X)) continue;
-    // A landmark known from the map: its variance, independent of the state.
-    PointState point;
-    point.p_w = point.fej = X;
-    point.slot = state.append(3);
-    state.P.block<3, 3>(point.slot.offset, point.slot.offset) =
-        Mat3d::Identity() * map_point_variance(options_, rays[i].ray.resolution);
-    point.added_ns = t_ns;
-    point.from_map = true;
-    state.points.emplace(rays[i].id, point);
+    add_registered_point(state, track, rays[i], X, t_ns);
     added.push_back(rays[i].id);
   }
   stats->registered = static_cast<int>(added.size());

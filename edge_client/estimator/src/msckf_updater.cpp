@@ -41,16 +41,45 @@ std::optional<Measurement> MsckfUpdater::feature_measurement(const State& state,
   return std::move(m);
 }
 
+StatusOr<Stage1Mode> parse_stage1_mode(const std::string& name) {
+  if (name == "known_landmark") return Stage1Mode::kKnownLandmark;
+  if (name == "msckf_nullspace") return Stage1Mode::kMsckfNullspace;
+  if (name == "ray_depth") return Stage1Mode::kRayDepth;
+  return absl::InvalidArgumentError("stage1_mode '" + name +
+                                    "' is not one of known_landmark, msckf_nullspace, ray_depth");
+}
+
+namespace {
+
+/// m whitened to unit-sigma rows scaled by sigma_px, for rows of noise sigma^2 I + H_f C H_f^T.
+void whiten(Measurement* m, const Eigen::MatrixXd& H_f, const Mat3d& C, double sigma_px) {
+  Eigen::MatrixXd S = H_f * C * H_f.transpose();
+  S.diagonal().array() += sigma_px * sigma_px;
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  m->H = sigma_px * llt.matrixL().solve(m->H);
+  m->r = sigma_px * llt.matrixL().solve(m->r);
+}
+
+}  // namespace
+
 std::optional<Measurement> MsckfUpdater::map_measurement(const State& state, const FeatureTrack& track,
-                                                         const MapPoint& point, bool nullspace_map,
+                                                         const MapPoint& point, Stage1Mode mode,
                                                          MsckfStats* stats) const {
-  StatusOr<FeatureRows> rows = feature_rows(state, track, point.p_w, point.p_w, options_.sigma_px);
-  if (!rows.ok() || rows->m.rows() < 2 * options_.min_observations - (nullspace_map ? 0 : 2)) {
+  const bool anchored = mode == Stage1Mode::kRayDepth && point.anchor;
+  StatusOr<FeatureRows> rows = anchored
+                                   ? anchored_feature_rows(state, track, *point.anchor, options_.sigma_px)
+                                   : feature_rows(state, track, point.p_w, point.p_w, options_.sigma_px);
+  const int needed = 2 * options_.min_observations - (mode == Stage1Mode::kMsckfNullspace ? 0 : 2);
+  if (!rows.ok() || rows->m.rows() < needed - (anchored ? 2 : 0)) {
     ++stats->too_few_observations;
     return std::nullopt;
   }
   Measurement m;
-  if (nullspace_map) {
+  if (anchored) {
+    m = rows->m;
+    whiten(&m, rows->H_f, anchored_covariance(state, *point.anchor, point.variance, options_.sigma_px),
+           options_.sigma_px);
+  } else if (mode == Stage1Mode::kMsckfNullspace) {
     StatusOr<SplitMeasurement> split = split_by_new_variable(rows->m, rows->H_f);
     if (!split.ok()) {
       ++stats->triangulation_failed;
@@ -59,13 +88,8 @@ std::optional<Measurement> MsckfUpdater::map_measurement(const State& state, con
     m = std::move(split->rest);
   } else {
     // Noise of the rows: pixel noise plus the map point's, correlated across the views.
-    const double s2 = options_.sigma_px * options_.sigma_px;
-    Eigen::MatrixXd S = point.variance * rows->H_f * rows->H_f.transpose();
-    S.diagonal().array() += s2;
-    const Eigen::LLT<Eigen::MatrixXd> llt(S);
     m = rows->m;
-    m.H = options_.sigma_px * llt.matrixL().solve(m.H);
-    m.r = options_.sigma_px * llt.matrixL().solve(m.r);
+    whiten(&m, rows->H_f, point.variance * Mat3d::Identity() + point.association, options_.sigma_px);
   }
   if (mahalanobis(state, m) > options_.chi2_multiplier * chi2_.q95(m.rows())) {
     ++stats->gated;
@@ -75,7 +99,7 @@ std::optional<Measurement> MsckfUpdater::map_measurement(const State& state, con
 }
 
 MsckfStats MsckfUpdater::update(State& state, const FeatureDatabase& db, const std::vector<FeatureId>& ids,
-                                const std::map<FeatureId, MapPoint>& map_points, bool nullspace_map) const {
+                                const std::map<FeatureId, MapPoint>& map_points, Stage1Mode mode) const {
   MsckfStats stats;
   // The most observed features first, at most max_features.
   std::vector<const FeatureTrack*> tracks;
@@ -93,7 +117,7 @@ MsckfStats MsckfUpdater::update(State& state, const FeatureDatabase& db, const s
     const auto mp = map_points.find(t->id);
     std::optional<Measurement> m = mp == map_points.end()
                                        ? feature_measurement(state, *t, &stats)
-                                       : map_measurement(state, *t, mp->second, nullspace_map, &stats);
+                                       : map_measurement(state, *t, mp->second, mode, &stats);
     if (!m) continue;
     if (mp != map_points.end()) ++stats.with_map;
     stats.rows += m->rows();

@@ -32,6 +32,7 @@ VioEstimator::VioEstimator(const EstimatorOptions& options, const config::Stereo
       g_w_(0.0, 0.0, -options.propagator.gravity_mps2),
       initializer_(options.initializer, rig, noise_, options.propagator.gravity_mps2),
       msckf_(options.msckf, options.triangulation),
+      stage1_mode_(parse_stage1_mode(options.map.stage1_mode).value_or(Stage1Mode::kKnownLandmark)),
       points_(options.points, options.triangulation),
       map_stage_(options.map, options.triangulation),
       registered_(options.map.registered_voxel_m, options.map.registered_per_voxel) {}
@@ -231,7 +232,7 @@ void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
   if (use_map)
     map_points = map_stage_.associate(s, db_, groundtruth_, &msckf_ids, *map_, deadline_, &out->map);
   Clock::time_point t0 = Clock::now();
-  out->msckf = msckf_.update(s, db_, msckf_ids, map_points, options_.map.stage1_mode == "msckf_nullspace");
+  out->msckf = msckf_.update(s, db_, msckf_ids, map_points, stage1_mode_);
   out->timing.msckf_ms = ms_since(t0);
   update_points(frame, point_ids, use_map, out);
   if (out->map.requests > 0) map_answering_ = out->map.answered > 0;

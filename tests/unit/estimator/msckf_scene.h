@@ -52,6 +52,18 @@ inline Scene make_scene(double pixel_noise = 0.0) {
   return s;
 }
 
+/// `state` moved by `d` over `vars` (d holds their errors in that order), the clones' first
+/// estimates reset to the moved poses (numeric Jacobians).
+inline State moved_state(const State& state, const std::vector<Slot>& vars, const Eigen::VectorXd& d) {
+  State moved = state;
+  Eigen::VectorXd dx = Eigen::VectorXd::Zero(moved.dim());
+  int c = 0;
+  for (const Slot& v : vars) dx.segment(v.offset, v.size) = d.segment(c, v.size), c += v.size;
+  moved.apply_correction(dx);
+  for (auto& [t, clone] : moved.clones) clone.fej = clone.T_w_b;
+  return moved;
+}
+
 /// `count` points in front of the clones (x 3..5 m), observed in stereo by every clone with
 /// pixel noise, added to `db` with ids 1..count; their positions.
 inline std::vector<Vec3d> add_points(const State& state, int count, double pixel_noise, unsigned seed,

@@ -3,6 +3,7 @@
 // noise, absolute correction that the null-space mode cannot give), the stage's handling of
 // the cloud's answers, silence and deadline, and the whole two-stage update in process on a
 // generated sequence (map over an in-process QueryEngine, no DDS).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -14,6 +15,7 @@
 #include "mrvs/edge/feature_measurement.h"
 #include "mrvs/edge/map_stage.h"
 #include "mrvs/edge/msckf_updater.h"
+#include "mrvs/test/numeric_jacobian.h"
 #include "mrvs/voxel/resolution.h"
 #include "msckf_scene.h"
 #include "vio_test_world.h"
@@ -129,6 +131,39 @@ TEST(MapAssociation, TheRayGoesThroughTheNewestLeftObservation) {
   EXPECT_FALSE(make_feature_ray(s.state, {}, s.track, T_w_c * Vec3d(0.0, 0.0, -2.0), map, o).has_value());
 }
 
+TEST(MapAssociation, AnUncertainPoseAsksALevelThatCoversWhereTheRayMeetsTheMap) {
+  test::Scene s = test::make_scene();
+  const MapDescription map = indoor_map();
+  MapOptions o;
+  o.uncertainty_scale = 2.0;
+  const TimestampNs t = 6000;
+  const Slot clone = s.state.clones.at(t).slot;
+  const auto set_sigma = [&](double sigma_p) {
+    s.state.P = Eigen::MatrixXd::Identity(s.state.dim(), s.state.dim()) * 1e-12;
+    s.state.P.block<3, 3>(clone.offset + 3, clone.offset + 3) = Mat3d::Identity() * sigma_p * sigma_p;
+  };
+  // Position only, isotropic: sigma across the ray is that of the position.
+  const RayAnchor anchor{t, 0, s.state.T_w_c(t, 0).inverse() * s.p_w};
+  set_sigma(0.004);
+  EXPECT_NEAR(hit_sigma_across(s.state, anchor), 0.004, 1e-6);
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.01f);  // footprint
+  set_sigma(0.008);  // 2 sigma = 1.6 cm
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.02f);
+  set_sigma(0.05);  // beyond the coarsest level: the coarsest
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.03f);
+  // Rotation: 0.5 deg at about 4 m is 3.5 cm across the ray.
+  s.state.P = Eigen::MatrixXd::Identity(s.state.dim(), s.state.dim()) * 1e-12;
+  const double sr = 0.5 * M_PI / 180.0;
+  s.state.P.block<3, 3>(clone.offset, clone.offset) = Mat3d::Identity() * sr * sr;
+  const double d = (s.p_w - s.state.T_w_c(t, 0).translation()).norm();
+  EXPECT_NEAR(hit_sigma_across(s.state, anchor), d * sr, 0.03 * d * sr);  // camera 5.5 cm off the body
+  // The uncertainty is that of the estimated pose: with ground-truth query poses it is not used.
+  set_sigma(0.05);
+  o.query_pose_source = "gt";
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, clone_truth(s.state), s.track, s.p_w, map, o)->ray.resolution,
+                  0.01f);
+}
+
 TEST(MapAssociation, TheMultiViewCheckAcceptsTheTruePointOnly) {
   test::Scene s = test::make_scene();
   const MapDescription map = indoor_map();
@@ -165,9 +200,9 @@ TEST(MapMeasurement, KnownLandmarkRowsAreWhitenedByTheMapNoise) {
   const test::Scene s = test::make_scene(0.5);
   MsckfOptions mo;
   const MsckfUpdater updater(mo, TriangulationOptions{});
-  const MapPoint point{s.p_w + Vec3d(0.004, -0.003, 0.002), 0.01 * 0.01};
+  const MapPoint point{s.p_w + Vec3d(0.004, -0.003, 0.002), 0.01 * 0.01, std::nullopt, Mat3d::Zero()};
   MsckfStats stats;
-  const auto m = updater.map_measurement(s.state, s.track, point, false, &stats);
+  const auto m = updater.map_measurement(s.state, s.track, point, Stage1Mode::kKnownLandmark, &stats);
   ASSERT_TRUE(m.has_value());
   auto rows = feature_rows(s.state, s.track, point.p_w, point.p_w, mo.sigma_px);
   ASSERT_TRUE(rows.ok());
@@ -183,7 +218,7 @@ TEST(MapMeasurement, KnownLandmarkRowsAreWhitenedByTheMapNoise) {
   const Eigen::VectorXd g = s2 * rows->m.H.transpose() * Si * rows->m.r;
   EXPECT_LT((m->H.transpose() * m->r - g).norm(), 1e-6 * g.norm() + 1e-12);
   // The reference code's mode projects the point out: 2N - 3 rows.
-  const auto ns = updater.map_measurement(s.state, s.track, point, true, &stats);
+  const auto ns = updater.map_measurement(s.state, s.track, point, Stage1Mode::kMsckfNullspace, &stats);
   ASSERT_TRUE(ns.has_value());
   EXPECT_EQ(ns->rows(), rows->m.rows() - 3);
 }
@@ -205,10 +240,11 @@ double mean_error_after_map_update(bool nullspace, const Vec3d& shift) {
   std::map<FeatureId, MapPoint> map_points;
   for (FeatureId id = 1; id <= 20; ++id) {
     ids.push_back(id);
-    map_points[id] = MapPoint{truth[id - 1], 0.005 * 0.005};
+    map_points[id] = MapPoint{truth[id - 1], 0.005 * 0.005, std::nullopt, Mat3d::Zero()};
   }
   const MsckfUpdater updater(MsckfOptions{}, TriangulationOptions{});
-  const MsckfStats stats = updater.update(s.state, db, ids, map_points, nullspace);
+  const MsckfStats stats = updater.update(
+      s.state, db, ids, map_points, nullspace ? Stage1Mode::kMsckfNullspace : Stage1Mode::kKnownLandmark);
   EXPECT_TRUE(stats.status.ok()) << stats.status;
   EXPECT_EQ(stats.with_map, 20);
   double sum = 0.0;
@@ -222,6 +258,129 @@ TEST(MapMeasurement, KnownLandmarksCorrectAShiftThatTheNullSpaceModeCannot) {
   const double nullspace = mean_error_after_map_update(true, shift);
   EXPECT_LT(known, 0.1 * shift.norm()) << "known_landmark";
   EXPECT_GT(nullspace, 0.7 * shift.norm()) << "msckf_nullspace";
+}
+
+/// The anchor of the scene's point on its newest left-camera observation, at `depth_error`
+/// beyond the point.
+RayAnchor scene_anchor(const State& state, const Vec3d& p_w, double depth_error) {
+  const TimestampNs t = state.newest_clone_ns();
+  const Vec3d p_c = state.T_w_c(t, 0).inverse() * p_w;
+  return RayAnchor{t, 0, p_c * (1.0 + depth_error / p_c.norm())};
+}
+
+TEST(MapMeasurement, AnchoredRowsMatchTheirModelNumerically) {
+  test::Scene s = test::make_scene(0.3);
+  s.state.cams[0].extrinsic_slot = s.state.append(6);  // the anchor camera's extrinsics too
+  s.state.P = Eigen::MatrixXd::Identity(s.state.dim(), s.state.dim()) * 1e-4;
+  const RayAnchor anchor = scene_anchor(s.state, s.p_w, 0.02);
+  auto rows = anchored_feature_rows(s.state, s.track, anchor, 1.0);
+  ASSERT_TRUE(rows.ok()) << rows.status();
+  EXPECT_EQ(rows->m.rows(), 2 * 12 - 2);  // every observation but the anchor's own
+  EXPECT_EQ(rows->observations, 11);
+  // The model: across the ray the point moves with the anchor camera, along it it stays.
+  const Vec3d X0 = *anchored_point(s.state, anchor);
+  const Vec3d v = (X0 - s.state.T_w_c(anchor.t_ns, 0).translation()).normalized();
+  FeatureTrack others = s.track;
+  others.obs.erase(
+      std::remove_if(others.obs.begin(), others.obs.end(),
+                     [&](const CameraObservation& o) { return o.t_ns == anchor.t_ns && o.cam == 0; }),
+      others.obs.end());
+  const auto residuals = [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+    const State moved = test::moved_state(s.state, rows->m.vars, d);
+    const Vec3d moved_by = *anchored_point(moved, anchor) - X0;
+    const Vec3d X = X0 + moved_by - v * v.dot(moved_by);
+    return feature_rows(moved, others, X, X, 1.0)->m.r;
+  };
+  EXPECT_TRUE(rows->m.r.isApprox(residuals(Eigen::VectorXd::Zero(rows->m.H.cols()))));
+  const Eigen::MatrixXd num =
+      -mrvs::test::numeric_jacobian<double>(residuals, static_cast<int>(rows->m.H.cols()), 1e-6);
+  EXPECT_TRUE(mrvs::test::matrices_near(rows->m.H, num, 1e-3));
+  // The anchor clone's columns carry the point (they are not those of plain rows).
+  auto plain = feature_rows(s.state, others, X0, X0, 1.0);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_GT((rows->m.H.leftCols(plain->m.H.cols()) - plain->m.H).norm(), 0.1 * plain->m.H.norm());
+  // An anchor whose clone or observation is gone is refused.
+  RayAnchor gone = anchor;
+  gone.t_ns = 999;
+  EXPECT_FALSE(anchored_feature_rows(s.state, s.track, gone, 1.0).ok());
+  EXPECT_FALSE(anchored_feature_rows(s.state, others, anchor, 1.0).ok());
+}
+
+/// Clones shifted together by `shift` (prior 10 cm a side), updated once with 20 map points
+/// found along the estimated rays (each on a surface facing the ray through the true point:
+/// across the ray the hit moves with the camera); the NEES of the newest clone's position
+/// after the update and its error along the mean ray.
+struct ShiftResult {
+  double nees = 0.0;
+  double error_along = 0.0, error_across = 0.0;
+};
+ShiftResult update_with_hits_along_estimated_rays(Stage1Mode mode, const Vec3d& shift,
+                                                  bool association_noise = false) {
+  test::Scene s = test::make_scene();
+  FeatureDatabase db;
+  const std::vector<Vec3d> truth = test::add_points(s.state, 20, 0.3, 5, &db);
+  const TimestampNs newest = s.state.newest_clone_ns();
+  const Vec3d true_p = s.state.clones.at(newest).T_w_b.translation();
+  for (auto& [t, c] : s.state.clones) {
+    c.T_w_b = c.fej = SE3d(c.T_w_b.quaternion(), c.T_w_b.translation() + shift);
+    s.state.P.block<3, 3>(c.slot.offset + 3, c.slot.offset + 3) = Mat3d::Identity() * 0.1 * 0.1;
+  }
+  // Fully correlated position priors: the clones move together (plain VIO's drift).
+  for (auto& [t, a] : s.state.clones)
+    for (auto& [u, b] : s.state.clones)
+      s.state.P.block<3, 3>(a.slot.offset + 3, b.slot.offset + 3) = Mat3d::Identity() * 0.1 * 0.1;
+  std::vector<FeatureId> ids;
+  std::map<FeatureId, MapPoint> map_points;
+  Vec3d mean_ray = Vec3d::Zero();
+  for (FeatureId id = 1; id <= 20; ++id) {
+    const SE3d T_w_c = s.state.T_w_c(newest, 0);
+    const Vec3d v = (truth[id - 1] + shift - T_w_c.translation()).normalized();  // estimated ray
+    const Vec3d hit = T_w_c.translation() + v * v.dot(truth[id - 1] - T_w_c.translation());
+    mean_ray += v;
+    FeatureRay ray;
+    ray.t_ns = newest;
+    ids.push_back(id);
+    map_points[id] = MapPoint{hit, 0.005 * 0.005, ray_anchor(s.state, *db.find(id), ray, hit), Mat3d::Zero()};
+    if (association_noise)
+      map_points[id].association = hit_covariance_across(s.state, *map_points[id].anchor);
+  }
+  mean_ray.normalize();
+  const MsckfUpdater updater(MsckfOptions{}, TriangulationOptions{});
+  const MsckfStats stats = updater.update(s.state, db, ids, map_points, mode);
+  EXPECT_TRUE(stats.status.ok()) << stats.status;
+  EXPECT_EQ(stats.with_map, 20);
+  const CloneState& c = s.state.clones.at(newest);
+  const Vec3d e = c.T_w_b.translation() - true_p;
+  const Mat3d P = s.state.P.block<3, 3>(c.slot.offset + 3, c.slot.offset + 3);
+  ShiftResult out;
+  out.nees = e.dot(P.ldlt().solve(e));
+  out.error_along = std::abs(e.dot(mean_ray));
+  out.error_across = (e - mean_ray * e.dot(mean_ray)).norm();
+  return out;
+}
+
+TEST(MapMeasurement, HitsAlongTheEstimatedRaysCorrectDepthWithoutFalseConfidenceInRayDepthMode) {
+  const Vec3d shift(0.06, 0.04, -0.03);  // mostly along the rays (body x)
+  const ShiftResult known = update_with_hits_along_estimated_rays(Stage1Mode::kKnownLandmark, shift);
+  const ShiftResult depth = update_with_hits_along_estimated_rays(Stage1Mode::kRayDepth, shift);
+  RecordProperty("known_nees", std::to_string(known.nees));
+  RecordProperty("ray_depth_nees", std::to_string(depth.nees));
+  RecordProperty("known_error_along_m", std::to_string(known.error_along));
+  RecordProperty("ray_depth_error_along_m", std::to_string(depth.error_along));
+  // ray_depth takes the depth the map gives, and knows that across the rays the hits say
+  // nothing; the known landmarks pin the pose where the estimated rays met the map (here
+  // they even keep most of the error along the rays) and claim millimetres.
+  EXPECT_LT(depth.error_along, 0.3 * shift.x());
+  EXPECT_GT(known.error_along, depth.error_along);
+  EXPECT_GT(known.error_across, 0.5 * Vec2d(shift.y(), shift.z()).norm());
+  EXPECT_GT(known.nees, 100.0);
+  EXPECT_LT(depth.nees, 11.3);  // chi-square 3 dof, 99 %
+  // Known landmarks with the association's uncertainty added: no longer pinned by their
+  // claimed millimetres (the hits are still taken as independent of the pose).
+  const ShiftResult assoc = update_with_hits_along_estimated_rays(Stage1Mode::kKnownLandmark, shift, true);
+  RecordProperty("known_association_nees", std::to_string(assoc.nees));
+  EXPECT_LT(assoc.nees, 11.3);
+  EXPECT_LT(assoc.error_along, known.error_along);
 }
 
 /// A cloud that answers each ray with its point at the initial distance (the triangulated

@@ -41,13 +41,7 @@ TEST(Msckf, FeatureRowsMatchTheMeasurementModelNumerically) {
   auto rows = feature_rows(s.state, s.track, s.p_w, s.p_w, 1.0);
   ASSERT_TRUE(rows.ok());
   const auto residuals = [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
-    State moved = s.state;
-    Eigen::VectorXd dx = Eigen::VectorXd::Zero(moved.dim());
-    int c = 0;
-    for (const Slot& v : rows->m.vars) dx.segment(v.offset, v.size) = d.segment(c, v.size), c += v.size;
-    moved.apply_correction(dx);
-    for (auto& [t, clone] : moved.clones) clone.fej = clone.T_w_b;
-    return feature_rows(moved, s.track, s.p_w, s.p_w, 1.0)->m.r;
+    return feature_rows(test::moved_state(s.state, rows->m.vars, d), s.track, s.p_w, s.p_w, 1.0)->m.r;
   };
   const Eigen::MatrixXd num =
       -mrvs::test::numeric_jacobian<double>(residuals, static_cast<int>(rows->m.H.cols()), 1e-6);

@@ -10,6 +10,7 @@
 
 #include "mrvs/config/options.h"
 #include "mrvs/edge/feature_database.h"
+#include "mrvs/edge/feature_measurement.h"
 #include "mrvs/edge/map_service.h"
 #include "mrvs/edge/state.h"
 #include "mrvs/io/types.h"
@@ -20,7 +21,14 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
   bool enabled = true;              ///< false: plain VIO (the edge_client --no-map switch)
   double fixed_resolution_m = 0.0;  ///< > 0: every ray asks this level (ablation); 0: multi-resolution
   double footprint_scale = 1.0;     ///< level for scale * depth / f (1: the paper's r* = argmin |r - d/f|)
-  std::string stage1_mode = "known_landmark";   ///< known_landmark | msckf_nullspace (the reference code)
+  /// > 0: multi-resolution never asks a level finer than this many standard deviations of
+  /// where the ray meets the map (the query clone's covariance across the ray).
+  double uncertainty_scale = 0.0;
+  /// Known landmarks (stage 1 and registered points): add the query pose's uncertainty across
+  /// the ray to the map point's covariance (the hit lies where the estimated ray met the map).
+  bool association_noise = false;
+  std::string stage1_mode =
+      "known_landmark";  ///< known_landmark | msckf_nullspace (the reference code) | ray_depth
   std::string query_pose_source = "estimated";  ///< estimated | gt (the paper's "w/ GT" rows)
   int max_stage1_features = 100;                ///< co-visible features queried per frame
   int max_rays_per_frame = 200;                 ///< stage 1 and registration together
@@ -46,7 +54,12 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
     v("fixed_resolution_m", fixed_resolution_m, in_range(0.0, 10.0),
       "ask this level only (0: multi-resolution), m");
     v("footprint_scale", footprint_scale, in_range(0.1, 100.0), "multi-resolution: level for scale * d / f");
-    v("stage1_mode", stage1_mode, one_of({"known_landmark", "msckf_nullspace"}), "stage-1 use of map points");
+    v("uncertainty_scale", uncertainty_scale, in_range(0.0, 100.0),
+      "multi-resolution: level at least this many sigma of the hit across the ray (0: off)");
+    v("association_noise", association_noise, any(),
+      "known landmarks: add the query pose's uncertainty across the ray to the map noise");
+    v("stage1_mode", stage1_mode, one_of({"known_landmark", "msckf_nullspace", "ray_depth"}),
+      "stage-1 use of map points");
     v("query_pose_source", query_pose_source, one_of({"estimated", "gt"}), "poses the rays are formed from");
     v("max_stage1_features", max_stage1_features, in_range(0, 256), "features queried in stage 1 per frame");
     v("max_rays_per_frame", max_rays_per_frame, in_range(0, 256), "rays per frame");
@@ -99,6 +112,17 @@ bool accept_hit(const State& state, const io::Trajectory& groundtruth, const Fea
                 double* mean_error_px = nullptr);
 
 /// Isotropic variance of a map point of level r (m^2).
+/// Covariance (m^2) of where the ray of the anchor's camera through its point meets the map,
+/// across the ray, from the covariance of the anchor clone (and extrinsics); zero when the
+/// clone is gone. hit_sigma_across: its largest standard deviation.
+Mat3d hit_covariance_across(const State& state, const RayAnchor& anchor);
+double hit_sigma_across(const State& state, const RayAnchor& anchor);
+
+/// The hit X as a point of the ray's camera: its depth there, the direction of the
+/// observation the ray went through (estimated clone pose); nullopt when X is behind it.
+std::optional<RayAnchor> ray_anchor(const State& state, const FeatureTrack& track, const FeatureRay& ray,
+                                    const Vec3d& X);
+
 inline double map_point_variance(const MapOptions& o, double r) {
   const double s = o.voxel_sigma_factor * r;
   return o.map_sigma_m * o.map_sigma_m + s * s;

@@ -69,6 +69,10 @@ class MapStage {
   const MapOptions& options() const { return options_; }
 
  private:
+  /// Adds the accepted hit X of `ray` as a registered point of `track` (independent of the
+  /// state, with the map's variance).
+  void add_registered_point(State& state, const FeatureTrack& track, const FeatureRay& ray, const Vec3d& X,
+                            TimestampNs t_ns) const;
   /// Sends `rays` within the deadline; the hits (empty vector when not answered).
   std::vector<voxel::RayHit> query(MapService& service, const std::vector<FeatureRay>& rays,
                                    TimestampNs stamp_ns, Clock::time_point deadline,

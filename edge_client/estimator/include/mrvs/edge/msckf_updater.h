@@ -8,6 +8,7 @@
 
 #include "mrvs/config/options.h"
 #include "mrvs/edge/feature_database.h"
+#include "mrvs/edge/feature_measurement.h"
 #include "mrvs/edge/state_helper.h"
 #include "mrvs/edge/triangulation.h"
 
@@ -45,25 +46,42 @@ struct MsckfStats {
 struct MapPoint {
   Vec3d p_w = Vec3d::Zero();  ///< world (map frame)
   double variance = 0.0;      ///< isotropic, m^2
+  /// The ray it was found along, with the hit's depth (for Stage1Mode::kRayDepth).
+  std::optional<RayAnchor> anchor;
+  /// Added to the known landmark's covariance: where the ray of the estimated pose met the
+  /// map is uncertain across the ray by the query pose's uncertainty (MapOptions::
+  /// association_noise); zero otherwise.
+  Mat3d association = Mat3d::Zero();
 };
+
+/// How stage 1 uses a map point.
+enum class Stage1Mode {
+  kKnownLandmark,   ///< the paper: a landmark of known position, every observation's rows
+  kMsckfNullspace,  ///< the reference code: linearised at the map point, H_f projected out
+  /// The map's depth along the query ray: the point is fixed in the query camera (its
+  /// direction that observation's), so it moves with the estimated pose instead of pinning
+  /// the pose to where the estimated ray met the map.
+  kRayDepth,
+};
+StatusOr<Stage1Mode> parse_stage1_mode(const std::string& name);
 
 class MsckfUpdater {
  public:
   MsckfUpdater(const MsckfOptions& options, const TriangulationOptions& triangulation);
 
   /// Updates `state` with the features `ids` of `db`: with their map point when `map_points`
-  /// has one (known landmark, or the reference code's null-space use with `nullspace_map`),
-  /// otherwise triangulated.
+  /// has one (used as `mode` says), otherwise triangulated.
   MsckfStats update(State& state, const FeatureDatabase& db, const std::vector<FeatureId>& ids,
-                    const std::map<FeatureId, MapPoint>& map_points = {}, bool nullspace_map = false) const;
+                    const std::map<FeatureId, MapPoint>& map_points = {},
+                    Stage1Mode mode = Stage1Mode::kKnownLandmark) const;
 
-  /// Stage-1 rows of a feature whose position is the map point: known_landmark keeps every
-  /// row, its noise sigma^2 I + H_f (v I) H_f^T whitened to sigma^2 I; nullspace_map
-  /// projects H_f out like the MSCKF, linearised at the map point. Gated; nullopt when not
-  /// usable (`stats` counts why).
+  /// Stage-1 rows of a feature whose position is the map point: kKnownLandmark keeps every
+  /// row, its noise sigma^2 I + H_f (v I + association) H_f^T whitened to sigma^2 I; kMsckfNullspace
+  /// projects H_f out like the MSCKF, linearised at the map point; kRayDepth uses
+  /// anchored_feature_rows with the noise of the map's depth along the ray and of the anchor
+  /// pixel across it. Gated; nullopt when not usable (`stats` counts why).
   std::optional<Measurement> map_measurement(const State& state, const FeatureTrack& track,
-                                             const MapPoint& point, bool nullspace_map,
-                                             MsckfStats* stats) const;
+                                             const MapPoint& point, Stage1Mode mode, MsckfStats* stats) const;
 
   /// The null-space projected, gated rows of one feature (exposed for tests and issue 8).
   /// nullopt when it is not usable; `stats` counts why.

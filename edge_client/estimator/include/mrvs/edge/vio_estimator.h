@@ -138,6 +138,7 @@ class VioEstimator {
   Vec3d g_w_;
   Initializer initializer_;
   MsckfUpdater msckf_;
+  Stage1Mode stage1_mode_;  ///< options_.map.stage1_mode (validated by create)
   PointUpdater points_;
   MapStage map_stage_;
   MapService* map_ = nullptr;
