@@ -48,9 +48,10 @@ import sys
 report, tree, seq = sys.argv[1:]
 def val(variant, key, f="eval.txt"):
     for line in open(f"{tree}/runs/{seq}/seed1/{variant}/{f}"):
-        k, v = line.split(": ")
-        if k == key:
+        k, sep, v = line.partition(": ")  # real files also hold other lines
+        if sep and k == key:
             return float(v)
+    sys.exit(f"{key} missing from {tree}/runs/{seq}/seed1/{variant}/{f}")
 p, m = val("plain", "ATE_RMSE_m"), val("map", "ATE_RMSE_m")
 want = f"| {seq} | 1 | {100 * p:.2f} | {100 * m:.2f} | {m / p:.2f} |"
 text = open(report).read()

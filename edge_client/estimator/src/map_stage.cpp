@@ -21,9 +21,9 @@ MapStage::MapStage(const MapOptions& options, const TriangulationOptions& triang
 void MapStage::add_registered_point(State& state, const FeatureTrack& track, const FeatureRay& ray,
                                     const Vec3d& X, TimestampNs t_ns) const {
   // A landmark known from the map: its variance (plus the association's), independent of the
-  // state. (Anchoring it on
-  // its ray like ray_depth's stage-1 points, correlated with the query clone, was measured
-  // worse: the registered points then no longer hold the pose where it was; see README.)
+  // state. (Anchoring it on its ray like ray_depth's stage-1 points, correlated with the query
+  // clone, was measured worse: the registered points then no longer hold the pose where it
+  // was; see edge_client/README.md.)
   Mat3d covariance = Mat3d::Identity() * map_point_variance(options_, ray.ray.resolution);
   if (options_.association_noise) {
     if (const std::optional<RayAnchor> anchor = ray_anchor(state, track, ray, X))
