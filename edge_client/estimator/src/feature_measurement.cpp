@@ -36,7 +36,6 @@ std::vector<BearingObservation> clone_bearings(const State& state, const Feature
 StatusOr<FeatureRows> feature_rows(const State& state, const FeatureTrack& track, const Vec3d& p_w,
                                    const Vec3d& p_w_lin, double sigma_px) {
   std::vector<const CameraObservation*> used;
-  std::vector<std::pair<TimestampNs, int>> out_used;
   Columns cols;
   for (const CameraObservation& o : track.obs) {
     const auto it = state.clones.find(o.t_ns);
@@ -44,7 +43,6 @@ StatusOr<FeatureRows> feature_rows(const State& state, const FeatureTrack& track
     const CameraState& cam = state.cams[static_cast<std::size_t>(o.cam)];
     if (!project_point(it->second.T_w_b, cam.T_b_c, *cam.model, p_w)) continue;
     used.push_back(&o);
-    out_used.emplace_back(o.t_ns, o.cam);
     cols.add(it->second.slot);
     cols.add(cam.extrinsic_slot);
     cols.add(cam.intrinsic_slot);
@@ -59,8 +57,7 @@ StatusOr<FeatureRows> feature_rows(const State& state, const FeatureTrack& track
   out.m.r.resize(rows);
   out.m.sigma = sigma_px;
   out.H_f.resize(rows, 3);
-  out.observations = static_cast<int>(used.size());
-  out.used = std::move(out_used);
+  for (const CameraObservation* o : used) out.used.emplace_back(o->t_ns, o->cam);
   const bool fej = state.options().use_fej;
   for (std::size_t k = 0; k < used.size(); ++k) {
     const CameraObservation& o = *used[k];
@@ -151,7 +148,6 @@ StatusOr<FeatureRows> anchored_feature_rows(const State& state, const FeatureTra
   rows->m.r.conservativeResize(n - 2);
   rows->H_f.conservativeResize(n - 2, Eigen::NoChange);
   rows->used.erase(self);
-  --rows->observations;
   return rows;
 }
 

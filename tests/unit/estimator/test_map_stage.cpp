@@ -276,7 +276,7 @@ TEST(MapMeasurement, AnchoredRowsMatchTheirModelNumerically) {
   auto rows = anchored_feature_rows(s.state, s.track, anchor, 1.0);
   ASSERT_TRUE(rows.ok()) << rows.status();
   EXPECT_EQ(rows->m.rows(), 2 * 12 - 2);  // every observation but the anchor's own
-  EXPECT_EQ(rows->observations, 11);
+  EXPECT_EQ(rows->used.size(), 11u);
   // The model: across the ray the point moves with the anchor camera, along it it stays.
   const Vec3d X0 = *anchored_point(s.state, anchor);
   const Vec3d v = (X0 - s.state.T_w_c(anchor.t_ns, 0).translation()).normalized();

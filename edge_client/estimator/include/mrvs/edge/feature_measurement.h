@@ -13,7 +13,6 @@ namespace mrvs::edge {
 struct FeatureRows {
   Measurement m;        ///< vars: the clones (and calibration) seen, in covariance order
   Eigen::MatrixXd H_f;  ///< rows x 3
-  int observations = 0;
   std::vector<std::pair<TimestampNs, int>> used;  ///< (t_ns, cam) of each pair of rows
 };
 
