@@ -8,6 +8,7 @@
 # result files (scripts/lib/make_report.py).
 #
 # Usage: scripts/run_experiments.sh [--quick] [--out DIR] [--seeds "1 2 3"] [--data DIR] [--sequences "A B"]
+#                                  [--edge-args "ARGS"]
 #   --quick   one 30 s indoor sequence (V1_01_easy), one seed, loopback link only
 #             (about 5 minutes here once built)
 #   default   every trajectory in ../shared/data/euroc_groundtruth/ full length plus the outdoor
@@ -15,6 +16,8 @@
 #   --data    where the generated sequences and maps go (default OUT/data); a sequence folder
 #             <name>_seed<N> already there is used as it is
 #   --sequences  only these (names of the trajectories, e.g. "V1_02_medium V2_01_easy", or outdoor)
+#   --edge-args  added to every edge_client run, e.g. "--stage1-mode ray_depth --set
+#             estimator.map.uncertainty_scale=2" (recorded in meta.txt and the report)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
 
@@ -23,6 +26,7 @@ out=""
 seeds=""
 data=""
 only=""
+edge_args=""
 while [[ $# -gt 0 ]]; do
   case $1 in
     --quick) quick=true; shift ;;
@@ -30,7 +34,8 @@ while [[ $# -gt 0 ]]; do
     --seeds) seeds=${2:?--seeds needs a list}; shift 2 ;;
     --data) data=${2:?--data needs a folder}; shift 2 ;;
     --sequences) only=${2:?--sequences needs names}; shift 2 ;;
-    -h|--help) sed -n '2,17p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    --edge-args) edge_args=${2?--edge-args needs a (quoted) list}; shift 2 ;;
+    -h|--help) sed -n '2,20p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "run_experiments.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -75,6 +80,8 @@ in_netns() {  # runs "$@" in a private network namespace when root (nothing leav
 run_variant() {  # run_variant SEQ_DIR MAP RESULT_DIR CONFIG MAP_CONFIG VARIANT [edge args...]
   local seq=$1 map=$2 dir=$3 config=$4 map_config=$5 variant=$6
   shift 6
+  # shellcheck disable=SC2206  # --edge-args is a word list by design
+  set -- "$@" $edge_args
   mkdir -p "$dir"
   if [[ $variant == plain ]]; then
     echo "edge_client --dataset $seq --config $config --no-map --threads 1 $*" >"$dir/command.txt"
@@ -138,6 +145,7 @@ fi
   echo "MODE: $($quick && echo quick || echo full)"
   echo "SEEDS: ${seeds// /,}"
   echo "SEQUENCES: $(printf '%s ' "${sequences[@]%% *}")"
+  echo "EDGE_ARGS: ${edge_args:-none}"
   echo "FASTDDS: $(dpkg-query -W -f='${Version}' libfastrtps2.9 2>/dev/null || echo unknown)"
   echo "COMPILER: $(c++ --version | head -1 | tr ' ' '_')"
   echo "CPU_CORES: $(nproc)"

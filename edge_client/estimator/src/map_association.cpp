@@ -60,10 +60,10 @@ std::optional<FeatureRay> make_feature_ray(const State& state, const io::Traject
   if (r <= 0.0) {
     auto level = voxel::select_level(map.resolutions, o.footprint_scale * out.depth_m, out.focal_px);
     if (!level) return std::nullopt;
-    if (o.uncertainty_scale > 0.0 && o.query_pose_source != "gt") {
-      const double need = o.uncertainty_scale * hit_sigma_across(state, RayAnchor{obs->t_ns, 0, p_c});
-      while (*level + 1 < map.resolutions.size() && map.resolutions[*level] < need) ++*level;
-    }
+    double need = o.min_resolution_m;
+    if (o.uncertainty_scale > 0.0 && o.query_pose_source != "gt")
+      need = std::max(need, o.uncertainty_scale * hit_sigma_across(state, RayAnchor{obs->t_ns, 0, p_c}));
+    while (*level + 1 < map.resolutions.size() && map.resolutions[*level] < need - 1e-9) ++*level;
     r = map.resolutions[*level];
   }
   const Vec3d c = T_w_c->translation();

@@ -127,8 +127,12 @@ std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabas
   const auto t0 = Clock::now();
   const auto map = service.description();
   if (!map) return added;
+  // Rays only for the room the state has left: a hit beyond it could not be registered.
+  // Twice the room, as about half the new features' rays give an accepted hit with room in
+  // the grid.
+  const int room = state.options().max_slam - static_cast<int>(state.points.size());
+  const int budget = std::min(options_.max_rays_per_frame - stats->stage1_rays, 2 * room);
   std::vector<FeatureRay> rays;
-  const int budget = options_.max_rays_per_frame - stats->stage1_rays;
   for (const auto& [id, track] : db.tracks()) {
     if (static_cast<int>(rays.size()) >= budget) break;
     if (track.first_ns() != t_ns || track.obs.size() < 2 || state.points.count(id) != 0)
@@ -140,9 +144,9 @@ std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabas
   stats->registration_rays = static_cast<int>(rays.size());
   const std::vector<voxel::RayHit> hits = query(service, rays, t_ns, deadline, stats);
   for (std::size_t i = 0; i < hits.size(); ++i) {
-    if (static_cast<int>(state.points.size()) >= state.options().max_slam) break;
     if (!hits[i].hit) continue;
     ++stats->registration_hits;
+    if (static_cast<int>(state.points.size()) >= state.options().max_slam) continue;
     const Vec3d X = map->origin + hits[i].point.cast<double>();
     const FeatureTrack& track = *db.find(rays[i].id);
     if (!accept_hit(state, groundtruth, track, rays[i], X, options_) || !grid->add(rays[i].id, X)) continue;

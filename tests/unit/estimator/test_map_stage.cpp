@@ -164,6 +164,27 @@ TEST(MapAssociation, AnUncertainPoseAsksALevelThatCoversWhereTheRayMeetsTheMap) 
                   0.01f);
 }
 
+TEST(MapAssociation, AMinimumResolutionSkipsTheFinerLevelsOnly) {
+  test::Scene s = test::make_scene();
+  const MapDescription map = indoor_map();
+  MapOptions o;
+  ASSERT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.01f);  // footprint
+  o.min_resolution_m = 0.02;
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.02f);
+  o.min_resolution_m = 0.025;  // between levels: the next coarser one
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.03f);
+  o.min_resolution_m = 1.0;  // beyond the coarsest: the coarsest
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, {}, s.track, s.p_w, map, o)->ray.resolution, 0.03f);
+  // A map property: with ground-truth query poses too; a fixed level is what it says.
+  o.min_resolution_m = 0.02;
+  o.query_pose_source = "gt";
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, clone_truth(s.state), s.track, s.p_w, map, o)->ray.resolution,
+                  0.02f);
+  o.fixed_resolution_m = 0.01;
+  EXPECT_FLOAT_EQ(make_feature_ray(s.state, clone_truth(s.state), s.track, s.p_w, map, o)->ray.resolution,
+                  0.01f);
+}
+
 TEST(MapAssociation, TheMultiViewCheckAcceptsTheTruePointOnly) {
   test::Scene s = test::make_scene();
   const MapDescription map = indoor_map();
@@ -529,6 +550,38 @@ TEST(MapStage, RegistersAcceptedHitsAsStatePointsWithTheMapVariance) {
   // All are seen at the newest clone: all suitable for stage 2.
   EXPECT_EQ(stage.suitable(sc.s.state, sc.db, grid, 6000).size(), added.size());
   EXPECT_TRUE(stage.suitable(sc.s.state, sc.db, grid, 99999).empty());
+}
+
+TEST(MapStage, RegistrationAsksOnlyForTheRoomTheStateHasLeft) {
+  StageScene sc;
+  const io::Trajectory none;
+  MapOptions o;
+  const MapStage stage(o, TriangulationOptions{});
+  FakeCloud cloud;
+  RegisteredMap grid(o.registered_voxel_m, o.registered_per_voxel);
+  const int max_slam = sc.s.state.options().max_slam;
+  for (FeatureId id = 1000; static_cast<int>(sc.s.state.points.size()) < max_slam - 3; ++id) {
+    PointState p;
+    p.slot = sc.s.state.append(3);
+    sc.s.state.points.emplace(id, p);
+  }
+  MapFrameStats st;
+  const auto added = stage.register_new(sc.s.state, sc.db, none, 1000, &grid, cloud,
+                                        Clock::now() + std::chrono::seconds(1), &st);
+  EXPECT_EQ(st.registration_rays, 6);  // twice the room of 3, of the 20 candidates
+  EXPECT_EQ(st.registration_hits, 6);  // every hit counted, also those without room
+  EXPECT_EQ(added.size(), 3u);
+  EXPECT_EQ(static_cast<int>(sc.s.state.points.size()), max_slam);
+  // Full: no request at all.
+  const int calls = cloud.calls;
+  MapFrameStats full;
+  EXPECT_TRUE(stage
+                  .register_new(sc.s.state, sc.db, none, 1000, &grid, cloud,
+                                Clock::now() + std::chrono::seconds(1), &full)
+                  .empty());
+  EXPECT_EQ(cloud.calls, calls);
+  EXPECT_EQ(full.registration_rays, 0);
+  EXPECT_EQ(full.requests, 0);
 }
 
 // ---- The two-stage update in process on a generated sequence ----

@@ -24,6 +24,9 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
   /// > 0: multi-resolution never asks a level finer than this many standard deviations of
   /// where the ray meets the map (the query clone's covariance across the ray).
   double uncertainty_scale = 0.0;
+  /// Multi-resolution never asks a level finer than this, m (0: any). A level whose voxels
+  /// are finer than about twice the survey's point spacing has holes and noisy planes.
+  double min_resolution_m = 0.0;
   /// Known landmarks (stage 1 and registered points): add the query pose's uncertainty across
   /// the ray to the map point's covariance (the hit lies where the estimated ray met the map).
   bool association_noise = false;
@@ -56,6 +59,8 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
     v("footprint_scale", footprint_scale, in_range(0.1, 100.0), "multi-resolution: level for scale * d / f");
     v("uncertainty_scale", uncertainty_scale, in_range(0.0, 100.0),
       "multi-resolution: level at least this many sigma of the hit across the ray (0: off)");
+    v("min_resolution_m", min_resolution_m, in_range(0.0, 10.0),
+      "multi-resolution: never a level finer than this, m (0: any)");
     v("association_noise", association_noise, any(),
       "known landmarks: add the query pose's uncertainty across the ray to the map noise");
     v("stage1_mode", stage1_mode, one_of({"known_landmark", "msckf_nullspace", "ray_depth"}),
