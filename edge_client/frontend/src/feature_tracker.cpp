@@ -33,11 +33,11 @@ std::optional<Vec2d> normalised(const camera::CameraModel& cam, const cv::Point2
 }
 
 /// KLT of `from` (pixels in `from_pyr`) into `to_pyr`, starting at `to`, over the features
-/// `which`; writes `to` and `ok` of those features only.
+/// `which`; writes `to` and `ok` of those features only. `min_eig` is OpenCV's minEigThreshold.
 void klt_subset(const std::vector<cv::Mat>& from_pyr, const std::vector<cv::Mat>& to_pyr,
                 const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
                 std::vector<unsigned char>* ok, const std::vector<std::size_t>& which,
-                const TrackerOptions& o, int max_level) {
+                const TrackerOptions& o, int max_level, double min_eig = kOpenCvMinEigenvalue) {
   if (which.empty()) return;
   std::vector<cv::Point2f> a, b;
   for (std::size_t i : which) a.push_back(from[i]), b.push_back((*to)[i]);
@@ -46,7 +46,7 @@ void klt_subset(const std::vector<cv::Mat>& from_pyr, const std::vector<cv::Mat>
   const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, o.klt_iterations,
                                   o.klt_epsilon);
   cv::calcOpticalFlowPyrLK(from_pyr, to_pyr, a, b, status, err, cv::Size(o.klt_window, o.klt_window),
-                           max_level, criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
+                           max_level, criteria, cv::OPTFLOW_USE_INITIAL_FLOW, min_eig);
   for (std::size_t j = 0; j < which.size(); ++j) (*to)[which[j]] = b[j], (*ok)[which[j]] = status[j];
 }
 
@@ -142,8 +142,10 @@ std::vector<FeatureTracker::Track> FeatureTracker::track_temporal(const std::vec
   const int guided_levels = std::min(1, options_.klt_max_level);
   std::vector<cv::Point2f> cur = predict(T_c_cprev);
   std::vector<unsigned char> ok(prev.size(), 0), back_ok(prev.size(), 1);
-  klt_subset(prev_pyramid_, pyramid, prev, &cur, &ok, guided, options_, guided_levels);
-  klt_subset(prev_pyramid_, pyramid, prev, &cur, &ok, full, options_, options_.klt_max_level);
+  // Windows whose gradients span one direction only (edges: KLT slides along them) are lost.
+  const double min_eig = options_.temporal_min_eigenvalue;
+  klt_subset(prev_pyramid_, pyramid, prev, &cur, &ok, guided, options_, guided_levels, min_eig);
+  klt_subset(prev_pyramid_, pyramid, prev, &cur, &ok, full, options_, options_.klt_max_level, min_eig);
   std::vector<cv::Point2f> back = prev;
   if (options_.temporal_round_trip_px > 0.0) {
     // Back from the new pixel: a KLT that slid along a repetitive texture or the epipolar

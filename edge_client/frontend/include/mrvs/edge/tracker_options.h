@@ -7,6 +7,9 @@
 
 namespace mrvs::edge {
 
+/// OpenCV's default minEigThreshold of calcOpticalFlowPyrLK.
+inline constexpr double kOpenCvMinEigenvalue = 1e-4;
+
 /// DSO-style pixel selector (algorithm.md 5.2).
 struct SelectorOptions : config::OptionsEquality<SelectorOptions> {
   int block_size = 32;           ///< gradient-histogram blocks, px
@@ -43,6 +46,9 @@ struct TrackerOptions : config::OptionsEquality<TrackerOptions> {
   double klt_epsilon = 0.01;            ///< KLT convergence, px
   double temporal_ransac_px = 1.0;      ///< fundamental-matrix RANSAC threshold, px
   double temporal_round_trip_px = 0.5;  ///< max previous -> current -> previous KLT error, px (0 = off)
+  /// Temporal KLT windows whose smallest gradient-matrix eigenvalue per pixel (OpenCV's
+  /// minEigThreshold scale) is below this are lost: edge-like patches slide along the edge.
+  double temporal_min_eigenvalue = kOpenCvMinEigenvalue;
   double temporal_ransac_confidence = 0.999;
   int min_ransac_points = 10;       ///< fewer temporal matches: all rejected (tracking lost)
   double stereo_epipolar_px = 1.0;  ///< max distance to the calibrated epipolar line, px
@@ -66,6 +72,8 @@ struct TrackerOptions : config::OptionsEquality<TrackerOptions> {
     v("temporal_ransac_px", temporal_ransac_px, in_range(0.05, 20.0), "temporal RANSAC threshold, px");
     v("temporal_round_trip_px", temporal_round_trip_px, in_range(0.0, 20.0),
       "temporal KLT round trip, px (0 = off)");
+    v("temporal_min_eigenvalue", temporal_min_eigenvalue, in_range(0.0, 1.0),
+      "temporal KLT: smallest eigenvalue per pixel of a tracked window (OpenCV's minEigThreshold)");
     v("temporal_ransac_confidence", temporal_ransac_confidence, in_range(0.5, 0.999999), "RANSAC confidence");
     v("min_ransac_points", min_ransac_points, in_range(8, 1000), "fewer temporal matches: tracking lost");
     v("stereo_epipolar_px", stereo_epipolar_px, in_range(0.05, 20.0), "stereo epipolar threshold, px");
