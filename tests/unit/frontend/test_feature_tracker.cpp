@@ -132,7 +132,7 @@ TEST(FeatureTracker, OutdoorStrictChecksMeetTheTargetsOverAllTracks) {
   testing::Test::RecordProperty("shipped_tracks", static_cast<int>(shipped.errors.size()));
   EXPECT_LT(quantile(e.errors, 0.5), 0.2);
   EXPECT_LT(quantile(e.errors, 0.9), 0.5);
-  // Each check removes tracks (so it is on), but most tracked steps stay.
+  // The strict checks remove tracked steps (so they are on), but at most 15 % of them.
   EXPECT_LT(e.errors.size(), shipped.errors.size());
   EXPECT_GT(e.errors.size(), 85 * shipped.errors.size() / 100);
 }
