@@ -97,7 +97,11 @@ PointStats PointUpdater::initialize(State& state, const FeatureDatabase& db,
     const auto [slot, df] = add_variable(state, split->first, split->R_f);
     PointState point;
     point.p_w = *p_w + df;
-    point.fej = point.p_w;
+    // First estimate: the position the rows above (which set the point's cross covariance)
+    // were linearised at, not the corrected one. With p_w + df, every later update's Jacobian
+    // disagreed with the initialisation's about the unobservable global yaw, and the updates
+    // turned the yaw steadily (degrees a minute on EuRoC-like runs).
+    point.fej = *p_w;
     point.slot = slot;
     point.added_ns = t_ns;
     state.points.emplace(id, point);
