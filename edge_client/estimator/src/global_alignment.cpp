@@ -61,7 +61,7 @@ StatusOr<std::optional<SE3d>> alignment_target(const AlignmentOptions& o, const 
   return std::optional<SE3d>(o.source == "gt" ? T : with_noise(T, o));
 }
 
-Status align_state(State& state, const SE3d& T_w_b, double position_sigma) {
+Status align_state(State& state, const SE3d& T_w_b, double position_sigma, std::optional<double> yaw_sigma) {
   if (!state.clones.empty()) return absl::FailedPreconditionError("align_state: only before the first clone");
   // The rotation about gravity (z) that best takes the estimated orientation to the target
   // one (2-D Procrustes on the horizontal block).
@@ -81,6 +81,14 @@ Status align_state(State& state, const SE3d& T_w_b, double position_sigma) {
   state.P.middleRows(3, 3).setZero();
   state.P.middleCols(3, 3).setZero();
   state.P.block<3, 3>(3, 3) = Mat3d::Identity() * position_sigma * position_sigma;
+  // So does the heading: the error about gravity, u^T dtheta_b with u = R_w_b^T z, is replaced
+  // by the source's (independent, yaw_sigma); roll and pitch keep the initialiser's.
+  if (!yaw_sigma) return absl::OkStatus();
+  const Vec3d u = state.imu.q_w_b.conjugate() * Vec3d::UnitZ();
+  Eigen::MatrixXd K = Eigen::MatrixXd::Identity(state.dim(), state.dim());
+  K.block<3, 3>(0, 0) -= u * u.transpose();
+  state.P = K * state.P * K.transpose();
+  state.P.block<3, 3>(0, 0) += *yaw_sigma * *yaw_sigma * u * u.transpose();
   return absl::OkStatus();
 }
 

@@ -116,10 +116,15 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
   MRVS_ASSIGN_OR_RETURN(const std::optional<SE3d> target,
                         alignment_target(options_.alignment, groundtruth_, state));
   if (target) {
-    const double sigma = options_.alignment.source == "gt"
-                             ? 1e-3
-                             : std::max(1e-3, options_.alignment.translation_noise_mean_m);
-    MRVS_RETURN_IF_ERROR(align_state(state, *target, sigma));
+    const AlignmentOptions& a = options_.alignment;
+    const bool gt = a.source == "gt";
+    const double sigma = gt ? 1e-3 : std::max(1e-3, a.translation_noise_mean_m);
+    // A constant pose says nothing of the heading: the initialiser's uncertainty stays.
+    const std::optional<double> yaw_sigma =
+        a.source == "constant"
+            ? std::nullopt
+            : std::optional<double>(gt ? 1e-3 : std::max(1e-3, a.rotation_noise_deg * M_PI / 180.0));
+    MRVS_RETURN_IF_ERROR(align_state(state, *target, sigma, yaw_sigma));
   }
   // The body rate at the start (for the clone's time-offset Jacobian).
   const auto rates = propagate(state.imu, imu_vector(), state.imu.t_ns, g_w_, noise_);

@@ -9,6 +9,7 @@
 // The target fixes position and heading (4 degrees of freedom); roll and pitch stay the
 // inertial estimate. Ground truth is used nowhere else.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,9 +53,11 @@ StatusOr<std::optional<SE3d>> alignment_target(const AlignmentOptions& options,
 /// Moves the state so that the IMU takes the target's position and heading: the frame
 /// turns about gravity (z) by the yaw that best matches the target orientation, so roll and
 /// pitch stay the IMU's own (gravity keeps pointing down, and a tilt error of the target does
-/// not enter). Velocity and its covariance rotate with the frame, the position covariance
-/// becomes position_sigma^2 I (the source's accuracy); the orientation error (body frame)
-/// and the biases are unchanged. Only before the first clone.
-Status align_state(State& state, const SE3d& T_w_b, double position_sigma);
+/// not enter). Velocity and its covariance rotate with the frame; the position and the
+/// heading take the source's accuracy: position_sigma^2 I, and yaw_sigma (rad; nullopt: the
+/// heading keeps its covariance) for the rotation about gravity, both uncorrelated with the
+/// rest. Roll, pitch and the biases keep their estimates and covariance. Only before the
+/// first clone.
+Status align_state(State& state, const SE3d& T_w_b, double position_sigma, std::optional<double> yaw_sigma);
 
 }  // namespace mrvs::edge
