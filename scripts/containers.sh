@@ -60,7 +60,7 @@ ct_timed base_image ct_base_image "$out/rootfs"
 
 step "3. binaries"
 if [[ $binaries == prebuilt ]]; then
-  ct_timed host_build mrvs_build --target cloud_server edge_client evaluate_trajectory dataset_simulator map_builder
+  ct_timed host_build mrvs_build --target demo_tools
   ct_stage_binaries "$MRVS_BUILD/bin"
 else
   ct_timed host_build mrvs_build --target evaluate_trajectory dataset_simulator map_builder

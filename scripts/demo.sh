@@ -31,7 +31,7 @@ done
 trajectory=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}/data/euroc_groundtruth/V1_01_easy.txt
 [[ -f $trajectory ]] || { echo "demo.sh: missing $trajectory (the shared EuRoC ground truth)" >&2; exit 1; }
 
-mrvs_build --target dataset_simulator evaluate_trajectory map_builder cloud_server edge_client
+mrvs_build --target demo_tools
 bin=$MRVS_BUILD/bin
 mkdir -p "$out"
 sequence=$out/V1_01_sim

@@ -44,7 +44,7 @@ shared=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}
 out=${out:-$MRVS_ROOT/results/$(date -u +%Y-%m-%d)$($quick && echo -quick)}
 if $quick; then seeds=${seeds:-1}; else seeds=${seeds:-"1 2 3"}; fi
 
-mrvs_build --target dataset_simulator evaluate_trajectory map_builder cloud_server edge_client link_probe
+mrvs_build --target experiment_tools
 bin=$MRVS_BUILD/bin
 data=${data:-$out/data}
 mkdir -p "$out/runs" "$data"

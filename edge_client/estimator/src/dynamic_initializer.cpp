@@ -28,6 +28,7 @@
 #include <Eigen/QR>
 
 #include "mrvs/edge/dynamic_initializer.h"
+#include "mrvs/edge/imu_factor.h"
 #include "mrvs/edge/preintegration.h"
 #include "mrvs/edge/triangulation.h"
 #include "mrvs/geometry/quaternion.h"
@@ -353,14 +354,9 @@ StatusOr<LinearSolution> solve_linear(const std::vector<SE3d>& T_b0_bk,
 }
 
 // ------------------------------------------------------------------------------------------
-// Ceres factors (automatic derivatives; quaternions in Eigen storage order x, y, z, w)
-
-template <typename T>
-Quat<T> exp_q(const Vec3<T>& phi) {
-  T q[4];
-  ceres::AngleAxisToQuaternion(phi.data(), q);
-  return Quat<T>(q[0], q[1], q[2], q[3]);
-}
+// Ceres factors (quaternions in Eigen storage order x, y, z, w). The pre-integration factor
+// is analytic (ImuCostFunction, imu_factor.h); the two small ones below use automatic
+// derivatives.
 
 template <typename T>
 Vec3<T> log_q(const Quat<T>& q) {
@@ -369,66 +365,6 @@ Vec3<T> log_q(const Quat<T>& q) {
   ceres::QuaternionToAngleAxis(wxyz, phi.data());
   return phi;
 }
-
-/// Right (body) perturbation q * Exp(delta), the ImuState convention.
-class RightQuaternionManifold : public ceres::Manifold {
- public:
-  int AmbientSize() const override { return 4; }
-  int TangentSize() const override { return 3; }
-  bool Plus(const double* x, const double* delta, double* x_plus_delta) const override {
-    Eigen::Map<Quatd> out(x_plus_delta);
-    out = quat::plus_right(Quatd(x), Vec3d(delta));
-    return true;
-  }
-  bool PlusJacobian(const double* x, double* jacobian) const override {
-    Eigen::Map<Eigen::Matrix<double, 4, 3, Eigen::RowMajor>> J(jacobian);
-    J = 0.5 * quat::left_multiplication_matrix(Quatd(x)).leftCols<3>();
-    return true;
-  }
-  bool Minus(const double* y, const double* x, double* y_minus_x) const override {
-    Eigen::Map<Vec3d> out(y_minus_x);
-    out = quat::minus_right(Quatd(y), Quatd(x));
-    return true;
-  }
-  bool MinusJacobian(const double* x, double* jacobian) const override {
-    Eigen::Map<Eigen::Matrix<double, 3, 4, Eigen::RowMajor>> J(jacobian);
-    J = 2.0 * quat::left_multiplication_matrix(Quatd(x)).transpose().topRows<3>();
-    return true;
-  }
-};
-
-/// Pre-integration factor (9 residuals, whitened) on (q_i, p_i, v_i, q_j, p_j, v_j, bg, ba).
-struct ImuFactor {
-  ImuFactor(const Preintegration& preintegration, const Vec3d& gravity) : pre(preintegration), g_w(gravity) {
-    const Mat9d info = (pre.cov + kPreintFloor * Mat9d::Identity()).inverse();
-    sqrt_info = Eigen::LLT<Mat9d>(0.5 * (info + info.transpose())).matrixU();
-  }
-
-  template <typename T>
-  bool operator()(const T* qi, const T* pi, const T* vi, const T* qj, const T* pj, const T* vj, const T* bg,
-                  const T* ba, T* residual) const {
-    const Eigen::Map<const Quat<T>> q_i(qi), q_j(qj);
-    const Eigen::Map<const Vec3<T>> p_i(pi), v_i(vi), p_j(pj), v_j(vj), b_g(bg), b_a(ba);
-    const Vec3<T> dbg = b_g - pre.bg_lin.cast<T>(), dba = b_a - pre.ba_lin.cast<T>();
-    const Quat<T> dq = pre.dq.cast<T>() * exp_q<T>(Vec3<T>(pre.dR_dbg.cast<T>() * dbg));
-    const Vec3<T> dp = pre.dp.cast<T>() + pre.dp_dbg.cast<T>() * dbg + pre.dp_dba.cast<T>() * dba;
-    const Vec3<T> dv = pre.dv.cast<T>() + pre.dv_dbg.cast<T>() * dbg + pre.dv_dba.cast<T>() * dba;
-    const T dt(pre.dt);
-    const Vec3<T> g = g_w.cast<T>();
-    const Quat<T> q_i_inv = q_i.conjugate();
-    Eigen::Matrix<T, 9, 1> r;
-    r.template segment<3>(0) = log_q<T>(Quat<T>(dq.conjugate() * (q_i_inv * q_j)));
-    r.template segment<3>(3) = q_i_inv * Vec3<T>(p_j - p_i - v_i * dt - T(0.5) * g * dt * dt) - dp;
-    r.template segment<3>(6) = q_i_inv * Vec3<T>(v_j - v_i - g * dt) - dv;
-    Eigen::Map<Eigen::Matrix<T, 9, 1>> out(residual);
-    out = sqrt_info.cast<T>() * r;
-    return true;
-  }
-
-  Preintegration pre;
-  Vec3d g_w;
-  Mat9d sqrt_info;
-};
 
 /// Reprojection of a world point in camera c of a body pose: the normalised-coordinate
 /// error mapped to pixels by the distortion Jacobian at the observation, whitened by sigma_px.
@@ -496,8 +432,24 @@ struct Variables {
   SE3d T_w_b(std::size_t k) const { return SE3d(Quatd(q[k].data()), Vec3d(p[k].data())); }
 };
 
+/// The smallest rotation taking direction a to direction b; a half turn about an axis
+/// orthogonal to a when they are opposite. The rotation of Quatd::FromTwoVectors (same
+/// arithmetic), without its SVD for the opposite case: that SVD alone took ~10-20 s of this
+/// file's -O3 compile time.
+Quatd rotation_between(const Vec3d& a, const Vec3d& b) {
+  const Vec3d u = a.normalized(), v = b.normalized();
+  const double c = u.dot(v);  // cos(angle)
+  if (c < -1.0 + 1e-12) {
+    const Vec3d n = u.unitOrthogonal();
+    return Quatd(0.0, n.x(), n.y(), n.z());
+  }
+  const double s = std::sqrt((1.0 + c) * 2.0);  // 2 cos(angle / 2); |u x v| = s sin(angle / 2)
+  const Vec3d xyz = u.cross(v) * (1.0 / s);
+  return Quatd(0.5 * s, xyz.x(), xyz.y(), xyz.z());
+}
+
 Variables initial_variables(const std::vector<SE3d>& T_b0_bk, const LinearSolution& lin, const Vec3d& bg) {
-  const Quatd q_w_b0 = Quatd::FromTwoVectors(lin.g_b0.normalized(), Vec3d(0.0, 0.0, -1.0));
+  const Quatd q_w_b0 = rotation_between(lin.g_b0.normalized(), Vec3d(0.0, 0.0, -1.0));
   Variables x;
   for (std::size_t k = 0; k < T_b0_bk.size(); ++k) {
     const Quatd q = (q_w_b0 * T_b0_bk[k].quaternion()).normalized();
@@ -568,10 +520,9 @@ std::unique_ptr<ceres::Problem> build_problem(Variables* x, const std::vector<Pr
       x->q[0].data());
   const Vec3d g_w(0.0, 0.0, -g_mag);
   for (std::size_t k = 0; k < pre.size(); ++k) {
-    problem->AddResidualBlock(
-        new ceres::AutoDiffCostFunction<ImuFactor, 9, 4, 3, 3, 4, 3, 3, 3, 3>(new ImuFactor(pre[k], g_w)),
-        nullptr, x->q[k].data(), x->p[k].data(), x->v[k].data(), x->q[k + 1].data(), x->p[k + 1].data(),
-        x->v[k + 1].data(), x->bg.data(), x->ba.data());
+    problem->AddResidualBlock(new ImuCostFunction(pre[k], g_w, kPreintFloor), nullptr, x->q[k].data(),
+                              x->p[k].data(), x->v[k].data(), x->q[k + 1].data(), x->p[k + 1].data(),
+                              x->v[k + 1].data(), x->bg.data(), x->ba.data());
   }
   problem->AddResidualBlock(new ceres::NormalPrior(Mat3d::Identity() / o.prior_gyro_bias, Vec3d::Zero()),
                             nullptr, x->bg.data());
