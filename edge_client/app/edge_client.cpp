@@ -77,8 +77,8 @@ void add_options(CLI::App& app, Args& a) {
   app.add_option("--query-pose-source", a.query_pose_source, "estimated | gt (the paper's w/ GT rows)")
       ->check(CLI::IsMember({"estimated", "gt"}));
   app.add_option("--stage1-mode", a.stage1_mode,
-                 "known_landmark | msckf_nullspace (the reference code) | ray_depth")
-      ->check(CLI::IsMember({"known_landmark", "msckf_nullspace", "ray_depth"}));
+                 "known_landmark | msckf_nullspace (the reference code) | ray_depth | plane")
+      ->check(CLI::IsMember({"known_landmark", "msckf_nullspace", "ray_depth", "plane"}));
   app.add_option("--groundtruth", a.groundtruth,
                  "Ground truth for the one-time alignment (TUM or EuRoC csv; default: the dataset's own)")
       ->check(CLI::ExistingFile);
@@ -141,7 +141,7 @@ mrvs::StatusOr<Inputs> load_inputs(const Args& a, bool* usage) {
 
 struct Report {
   std::vector<double> image_ms, tracking_ms, update_ms, select_ms, ray_ms, total_ms;
-  std::vector<double> rays, hits, accepted, registered, bytes_up, bytes_down, rtt_ms;
+  std::vector<double> rays, hits, accepted, planes, registered, bytes_up, bytes_down, rtt_ms;
   int frames = 0, skipped = 0, initialized_at = -1, points_max = 0, frames_without_map = 0, requests = 0,
       timeouts = 0;
   double frame_interval_ms = 0.0;  ///< median image interval of the dataset (the frame's real-time budget)
@@ -174,8 +174,8 @@ void print_report(const Report& r, double wall_s) {
              r.frames_without_map);
   fmt::print("RAYS_PER_FRAME: {:.1f}\nRAYS_PER_FRAME_MAX: {:.0f}\nHITS_PER_FRAME: {:.1f}\n", mean(r.rays),
              quantile(r.rays, 1.0), mean(r.hits));
-  fmt::print("ACCEPTED_PER_FRAME: {:.1f}\nREGISTERED_PER_FRAME: {:.2f}\n", mean(r.accepted),
-             mean(r.registered));
+  fmt::print("ACCEPTED_PER_FRAME: {:.1f}\nWITH_PLANE_PER_FRAME: {:.2f}\nREGISTERED_PER_FRAME: {:.2f}\n",
+             mean(r.accepted), mean(r.planes), mean(r.registered));
   fmt::print(
       "PAYLOAD_UP_BYTES_PER_FRAME: {:.0f}\nPAYLOAD_DOWN_BYTES_PER_FRAME: "
       "{:.0f}\nPAYLOAD_BYTES_PER_FRAME_MAX: {:.0f}\n",
@@ -217,6 +217,7 @@ void account(const mrvs::edge::StereoOutput& out, int k, bool use_map, Report* r
   r->rays.push_back(m.stage1_rays + m.registration_rays);
   r->hits.push_back(m.stage1_hits + m.registration_hits);
   r->accepted.push_back(m.stage1_accepted);
+  r->planes.push_back(m.stage1_planes);
   r->registered.push_back(m.registered);
   r->bytes_up.push_back(static_cast<double>(m.bytes_up));
   r->bytes_down.push_back(static_cast<double>(m.bytes_down));

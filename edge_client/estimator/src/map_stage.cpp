@@ -13,21 +13,53 @@ double ms_since(MapStage::Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(MapStage::Clock::now() - t0).count();
 }
 
+SurfaceFitOptions fit_options(const MapOptions& o) {
+  SurfaceFitOptions out;
+  out.radius_m = o.plane_radius_m;
+  out.min_points = o.plane_min_points;
+  out.max_rms_m = o.plane_max_rms_m;
+  return out;
+}
+
+/// The map O with O A O^T the covariance of where a ray of direction v (world) meets the
+/// plane when A is that of the ray's point across the ray: the oblique projection along v
+/// onto the plane, I - v n^T / (n.v), |n.v| held at 0.2 or more (grazing rays).
+Mat3d on_surface(const SurfacePlane& plane, const Vec3d& v_w) {
+  const Vec3d v = v_w.normalized();
+  const double c = plane.normal.dot(v);
+  const double held = std::abs(c) < 0.2 ? std::copysign(0.2, c == 0.0 ? 1.0 : c) : c;
+  return Mat3d::Identity() - v * plane.normal.transpose() / held;
+}
+
+/// Every hit is a point of the prior map (whether or not its feature is accepted).
+void remember_surfaces(const std::vector<voxel::RayHit>& hits, const Vec3d& origin, SurfaceMap* surfaces) {
+  if (surfaces == nullptr) return;
+  for (const voxel::RayHit& h : hits) {
+    if (h.hit) surfaces->add(origin + h.point.cast<double>());
+  }
+}
+
 }  // namespace
 
 MapStage::MapStage(const MapOptions& options, const TriangulationOptions& triangulation)
     : options_(options), triangulation_(triangulation) {}
 
 void MapStage::add_registered_point(State& state, const FeatureTrack& track, const FeatureRay& ray,
-                                    const Vec3d& X, TimestampNs t_ns) const {
+                                    const Vec3d& X, TimestampNs t_ns, const SurfacePlane* plane) const {
   // A landmark known from the map: its variance (plus the association's), independent of the
   // state. (Anchoring it on its ray like ray_depth's stage-1 points, correlated with the query
   // clone, was measured worse: the registered points then no longer hold the pose where it
   // was; see edge_client/README.md.)
   Mat3d covariance = Mat3d::Identity() * map_point_variance(options_, ray.ray.resolution);
-  if (options_.association_noise) {
-    if (const std::optional<RayAnchor> anchor = ray_anchor(state, track, ray, X))
-      covariance += hit_covariance_across(state, *anchor);
+  const std::optional<RayAnchor> anchor =
+      options_.association_noise || plane != nullptr ? ray_anchor(state, track, ray, X) : std::nullopt;
+  if (anchor && plane != nullptr) {
+    // Where the ray met the surface slides along it with the query pose's error.
+    const Mat3d O =
+        on_surface(*plane, state.T_w_c(anchor->t_ns, anchor->cam).rotation_matrix() * anchor->p_c);
+    covariance += O * hit_covariance_across(state, *anchor) * O.transpose();
+  } else if (anchor) {
+    covariance += hit_covariance_across(state, *anchor);
   }
   PointState point;
   point.p_w = point.fej = X;
@@ -68,7 +100,8 @@ std::vector<voxel::RayHit> MapStage::query(MapService& service, const std::vecto
 std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const FeatureDatabase& db,
                                                   const io::Trajectory& groundtruth,
                                                   std::vector<FeatureId>* ids, MapService& service,
-                                                  Clock::time_point deadline, MapFrameStats* stats) const {
+                                                  Clock::time_point deadline, MapFrameStats* stats,
+                                                  SurfaceMap* surfaces) const {
   std::map<FeatureId, MapPoint> out;
   const auto t0 = Clock::now();
   const auto map = service.description();
@@ -92,6 +125,8 @@ std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const Feat
   }
   stats->stage1_rays = static_cast<int>(rays.size());
   const std::vector<voxel::RayHit> hits = query(service, rays, state.newest_clone_ns(), deadline, stats);
+  remember_surfaces(hits, map->origin, surfaces);
+  const bool planes = surfaces != nullptr && options_.stage1_mode == "plane";
   for (std::size_t i = 0; i < hits.size(); ++i) {
     if (!hits[i].hit) continue;
     ++stats->stage1_hits;
@@ -100,9 +135,13 @@ std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const Feat
     if (!accept_hit(state, groundtruth, track, rays[i], X, options_)) continue;
     MapPoint& point = out[rays[i].id];
     point = MapPoint{X, map_point_variance(options_, rays[i].ray.resolution),
-                     ray_anchor(state, track, rays[i], X), Mat3d::Zero()};
+                     ray_anchor(state, track, rays[i], X), Mat3d::Zero(), std::nullopt};
     if (options_.association_noise && point.anchor)
       point.association = hit_covariance_across(state, *point.anchor);
+    if (planes) {
+      point.plane = surfaces->plane_at(X, fit_options(options_));
+      stats->stage1_planes += point.plane.has_value();
+    }
   }
   stats->stage1_accepted = static_cast<int>(out.size());
   // The reference code's rule: with most features on the map, the others are suspect.
@@ -122,7 +161,8 @@ std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const Feat
 std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabase& db,
                                               const io::Trajectory& groundtruth, TimestampNs t_ns,
                                               RegisteredMap* grid, MapService& service,
-                                              Clock::time_point deadline, MapFrameStats* stats) const {
+                                              Clock::time_point deadline, MapFrameStats* stats,
+                                              SurfaceMap* surfaces) const {
   std::vector<FeatureId> added;
   const auto t0 = Clock::now();
   const auto map = service.description();
@@ -143,14 +183,20 @@ std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabas
   }
   stats->registration_rays = static_cast<int>(rays.size());
   const std::vector<voxel::RayHit> hits = query(service, rays, t_ns, deadline, stats);
+  remember_surfaces(hits, map->origin, surfaces);
+  const bool planes = surfaces != nullptr && options_.stage1_mode == "plane";
   for (std::size_t i = 0; i < hits.size(); ++i) {
     if (!hits[i].hit) continue;
     ++stats->registration_hits;
     if (static_cast<int>(state.points.size()) >= state.options().max_slam) continue;
     const Vec3d X = map->origin + hits[i].point.cast<double>();
     const FeatureTrack& track = *db.find(rays[i].id);
-    if (!accept_hit(state, groundtruth, track, rays[i], X, options_) || !grid->add(rays[i].id, X)) continue;
-    add_registered_point(state, track, rays[i], X, t_ns);
+    if (!accept_hit(state, groundtruth, track, rays[i], X, options_)) continue;
+    // stage1_mode plane: only hits on a surface, which slide along it with the pose.
+    std::optional<SurfacePlane> plane;
+    if (planes && !(plane = surfaces->plane_at(X, fit_options(options_)))) continue;
+    if (!grid->add(rays[i].id, X)) continue;
+    add_registered_point(state, track, rays[i], X, t_ns, plane ? &*plane : nullptr);
     added.push_back(rays[i].id);
   }
   stats->registered = static_cast<int>(added.size());

@@ -1,6 +1,7 @@
 #include "mrvs/edge/msckf_updater.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <Eigen/Cholesky>
 
@@ -12,7 +13,8 @@ MsckfUpdater::MsckfUpdater(const MsckfOptions& options, const TriangulationOptio
     : options_(options), triangulation_(triangulation), chi2_(500) {}
 
 std::optional<Measurement> MsckfUpdater::feature_measurement(const State& state, const FeatureTrack& track,
-                                                             MsckfStats* stats) const {
+                                                             MsckfStats* stats,
+                                                             const MapPoint* on_plane) const {
   const std::vector<BearingObservation> bearings = clone_bearings(state, track);
   if (static_cast<int>(bearings.size()) < options_.min_observations) {
     ++stats->too_few_observations;
@@ -23,11 +25,12 @@ std::optional<Measurement> MsckfUpdater::feature_measurement(const State& state,
     ++stats->triangulation_failed;
     return std::nullopt;
   }
-  const StatusOr<FeatureRows> rows = feature_rows(state, track, *p_w, *p_w, options_.sigma_px);
+  StatusOr<FeatureRows> rows = feature_rows(state, track, *p_w, *p_w, options_.sigma_px);
   if (!rows.ok() || rows->m.rows() <= 3) {
     ++stats->triangulation_failed;
     return std::nullopt;
   }
+  if (on_plane != nullptr && on_plane->plane) append_plane_row(*on_plane, *p_w, &*rows);
   StatusOr<SplitMeasurement> split = split_by_new_variable(rows->m, rows->H_f);
   if (!split.ok()) {
     ++stats->triangulation_failed;
@@ -45,8 +48,24 @@ StatusOr<Stage1Mode> parse_stage1_mode(const std::string& name) {
   if (name == "known_landmark") return Stage1Mode::kKnownLandmark;
   if (name == "msckf_nullspace") return Stage1Mode::kMsckfNullspace;
   if (name == "ray_depth") return Stage1Mode::kRayDepth;
+  if (name == "plane") return Stage1Mode::kPlane;
   return absl::InvalidArgumentError("stage1_mode '" + name +
-                                    "' is not one of known_landmark, msckf_nullspace, ray_depth");
+                                    "' is not one of known_landmark, msckf_nullspace, ray_depth, plane");
+}
+
+void append_plane_row(const MapPoint& point, const Vec3d& p_w, FeatureRows* rows) {
+  // 0 = n . (p - X) + noise of the map point (variance) and of the surface (rms), scaled to
+  // the rows' sigma; the feature's error enters through H_f, the state's not at all.
+  const Vec3d& n = point.plane->normal;
+  const double sigma_m = std::sqrt(point.variance + point.plane->rms_m * point.plane->rms_m);
+  const double scale = rows->m.sigma / std::max(sigma_m, 1e-6);
+  const Eigen::Index k = rows->m.rows();
+  rows->m.H.conservativeResize(k + 1, Eigen::NoChange);
+  rows->m.H.row(k).setZero();
+  rows->m.r.conservativeResize(k + 1);
+  rows->m.r(k) = -scale * n.dot(p_w - point.p_w);
+  rows->H_f.conservativeResize(k + 1, Eigen::NoChange);
+  rows->H_f.row(k) = scale * n.transpose();
 }
 
 namespace {
@@ -65,6 +84,7 @@ void whiten(Measurement* m, const Eigen::MatrixXd& H_f, const Mat3d& C, double s
 std::optional<Measurement> MsckfUpdater::map_measurement(const State& state, const FeatureTrack& track,
                                                          const MapPoint& point, Stage1Mode mode,
                                                          MsckfStats* stats) const {
+  if (mode == Stage1Mode::kPlane) return feature_measurement(state, track, stats, &point);
   const bool anchored = mode == Stage1Mode::kRayDepth && point.anchor;
   StatusOr<FeatureRows> rows = anchored
                                    ? anchored_feature_rows(state, track, *point.anchor, options_.sigma_px)

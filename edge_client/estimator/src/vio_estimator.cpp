@@ -12,6 +12,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+/// Map points kept per plane_radius_m cell of the SurfaceMap: a plane needs a few, a fit of
+/// more is no better and costs time.
+constexpr int kSurfacePointsPerCell = 16;
+
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -35,7 +39,8 @@ VioEstimator::VioEstimator(const EstimatorOptions& options, const config::Stereo
       stage1_mode_(parse_stage1_mode(options.map.stage1_mode).value_or(Stage1Mode::kKnownLandmark)),
       points_(options.points, options.triangulation),
       map_stage_(options.map, options.triangulation),
-      registered_(options.map.registered_voxel_m, options.map.registered_per_voxel) {}
+      registered_(options.map.registered_voxel_m, options.map.registered_per_voxel),
+      surfaces_(options.map.plane_radius_m, kSurfacePointsPerCell) {}
 
 StatusOr<VioEstimator> VioEstimator::create(const EstimatorOptions& options,
                                             const config::StereoRigCalibration& rig,
@@ -235,7 +240,8 @@ void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
   // Stage 1: the MSCKF update, with the features' map points where the cloud has them.
   std::map<FeatureId, MapPoint> map_points;
   if (use_map)
-    map_points = map_stage_.associate(s, db_, groundtruth_, &msckf_ids, *map_, deadline_, &out->map);
+    map_points =
+        map_stage_.associate(s, db_, groundtruth_, &msckf_ids, *map_, deadline_, &out->map, &surfaces_);
   Clock::time_point t0 = Clock::now();
   out->msckf = msckf_.update(s, db_, msckf_ids, map_points, stage1_mode_);
   out->timing.msckf_ms = ms_since(t0);
@@ -270,7 +276,8 @@ void VioEstimator::update_points(const FeatureFrame& frame, const std::vector<Fe
   for (FeatureId id : removed) registered_.remove(id);
   out->points.removed = static_cast<int>(removed.size());
   if (use_map && options_.map.register_new_features) {
-    map_stage_.register_new(s, db_, groundtruth_, frame.t_ns, &registered_, *map_, deadline_, &out->map);
+    map_stage_.register_new(s, db_, groundtruth_, frame.t_ns, &registered_, *map_, deadline_, &out->map,
+                            &surfaces_);
   }
   for (const auto& [id, p] : s.points) {
     db_.keep_from(id, frame.t_ns);  // points keep only their newest observations

@@ -64,23 +64,20 @@ inline State moved_state(const State& state, const std::vector<Slot>& vars, cons
   return moved;
 }
 
-/// `count` points in front of the clones (x 3..5 m), observed in stereo by every clone with
-/// pixel noise, added to `db` with ids 1..count; their positions.
-inline std::vector<Vec3d> add_points(const State& state, int count, double pixel_noise, unsigned seed,
-                                     FeatureDatabase* db) {
+/// The points `points`, observed in stereo by every clone with pixel noise, added to `db`
+/// with ids 1..size.
+inline void add_observed_points(const State& state, const std::vector<Vec3d>& points, double pixel_noise,
+                                unsigned seed, FeatureDatabase* db) {
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::normal_distribution<double> n(0.0, pixel_noise);
   const auto noise = [&] { return pixel_noise > 0 ? Vec2d(n(rng), n(rng)) : Vec2d::Zero(); };
-  std::vector<Vec3d> points;
-  for (FeatureId id = 1; id <= static_cast<FeatureId>(count); ++id) {
-    const Vec3d p_w(4.0 + u(rng), 1.5 * u(rng), u(rng));
-    points.push_back(p_w);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3d& p_w = points[i];
     for (const auto& [t, clone] : state.clones) {
       FeatureFrame f;
       f.t_ns = t;
       FeatureObservation o;
-      o.id = id;
+      o.id = static_cast<FeatureId>(i + 1);
       const auto& cams = state.cams;
       o.uv_left = *cams[0].model->project((clone.T_w_b * cams[0].T_b_c).inverse() * p_w) + noise();
       o.xn_left = *cams[0].model->undistort(o.uv_left);
@@ -91,6 +88,20 @@ inline std::vector<Vec3d> add_points(const State& state, int count, double pixel
       db->add(f);
     }
   }
+}
+
+/// `count` points in front of the clones (x 3..5 m), observed in stereo by every clone with
+/// pixel noise, added to `db` with ids 1..count; their positions.
+inline std::vector<Vec3d> add_points(const State& state, int count, double pixel_noise, unsigned seed,
+                                     FeatureDatabase* db) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Vec3d> points;
+  for (int i = 0; i < count; ++i) {
+    const double x = 4.0 + u(rng), y = 1.5 * u(rng), z = u(rng);
+    points.emplace_back(x, y, z);
+  }
+  add_observed_points(state, points, pixel_noise, seed + 1, db);
   return points;
 }
 

@@ -221,7 +221,8 @@ TEST(MapMeasurement, KnownLandmarkRowsAreWhitenedByTheMapNoise) {
   const test::Scene s = test::make_scene(0.5);
   MsckfOptions mo;
   const MsckfUpdater updater(mo, TriangulationOptions{});
-  const MapPoint point{s.p_w + Vec3d(0.004, -0.003, 0.002), 0.01 * 0.01, std::nullopt, Mat3d::Zero()};
+  const MapPoint point{s.p_w + Vec3d(0.004, -0.003, 0.002), 0.01 * 0.01, std::nullopt, Mat3d::Zero(),
+                       std::nullopt};
   MsckfStats stats;
   const auto m = updater.map_measurement(s.state, s.track, point, Stage1Mode::kKnownLandmark, &stats);
   ASSERT_TRUE(m.has_value());
@@ -261,7 +262,7 @@ double mean_error_after_map_update(bool nullspace, const Vec3d& shift) {
   std::map<FeatureId, MapPoint> map_points;
   for (FeatureId id = 1; id <= 20; ++id) {
     ids.push_back(id);
-    map_points[id] = MapPoint{truth[id - 1], 0.005 * 0.005, std::nullopt, Mat3d::Zero()};
+    map_points[id] = MapPoint{truth[id - 1], 0.005 * 0.005, std::nullopt, Mat3d::Zero(), std::nullopt};
   }
   const MsckfUpdater updater(MsckfOptions{}, TriangulationOptions{});
   const MsckfStats stats = updater.update(
@@ -361,7 +362,8 @@ ShiftResult update_with_hits_along_estimated_rays(Stage1Mode mode, const Vec3d& 
     FeatureRay ray;
     ray.t_ns = newest;
     ids.push_back(id);
-    map_points[id] = MapPoint{hit, 0.005 * 0.005, ray_anchor(s.state, *db.find(id), ray, hit), Mat3d::Zero()};
+    map_points[id] = MapPoint{hit, 0.005 * 0.005, ray_anchor(s.state, *db.find(id), ray, hit), Mat3d::Zero(),
+                              std::nullopt};
     if (association_noise)
       map_points[id].association = hit_covariance_across(s.state, *map_points[id].anchor);
   }
@@ -637,6 +639,21 @@ TEST(TwoStageUpdate, TheMapCorrectsTheAlignmentErrorThatPlainVioKeeps) {
   const double e_gt = test::ate_rmse(*seq, with_gt, false);
   RecordProperty("ate_gt_queries_m", std::to_string(e_gt));
   EXPECT_LT(e_gt, 0.5 * e_plain) << "plain " << e_plain << " w/ GT " << e_gt;
+  // Stage 1 on the map surfaces' normals (stage1_mode plane) corrects it too.
+  o.map.query_pose_source = "estimated";
+  o.map.stage1_mode = "plane";
+  outs.clear();
+  const auto with_planes = test::run_estimator(*seq, o, nullptr, map.get(), &outs);
+  ASSERT_EQ(with_planes.size(), plain.size());
+  const double e_plane = test::ate_rmse(*seq, with_planes, false);
+  RecordProperty("ate_plane_m", std::to_string(e_plane));
+  int planes = 0;
+  accepted = 0;
+  for (const FrameOutput& f : outs) accepted += f.map.stage1_accepted, planes += f.map.stage1_planes;
+  RecordProperty("plane_points", std::to_string(planes) + " of " + std::to_string(accepted));
+  EXPECT_GT(planes, 0);
+  EXPECT_LE(planes, accepted);
+  EXPECT_LT(e_plane, 0.5 * e_plain) << "plain " << e_plain << " plane " << e_plane;
 }
 
 TEST(TwoStageUpdate, ASilentCloudGivesPlainVio) {

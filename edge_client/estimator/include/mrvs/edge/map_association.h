@@ -31,7 +31,13 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
   /// the ray to the map point's covariance (the hit lies where the estimated ray met the map).
   bool association_noise = false;
   std::string stage1_mode =
-      "known_landmark";  ///< known_landmark | msckf_nullspace (the reference code) | ray_depth
+      "known_landmark";  ///< known_landmark | msckf_nullspace (the reference code) | ray_depth | plane
+  /// stage1_mode plane: the surface plane around a hit, fitted to the map points the cloud
+  /// has answered (SurfaceMap): within this radius, at least plane_min_points, at most
+  /// plane_max_rms_m rough.
+  double plane_radius_m = 0.5;
+  int plane_min_points = 6;
+  double plane_max_rms_m = 0.05;
   std::string query_pose_source = "estimated";  ///< estimated | gt (the paper's "w/ GT" rows)
   int max_stage1_features = 100;                ///< co-visible features queried per frame
   int max_rays_per_frame = 200;                 ///< stage 1 and registration together
@@ -63,8 +69,11 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
       "multi-resolution: never a level finer than this, m (0: any)");
     v("association_noise", association_noise, any(),
       "known landmarks: add the query pose's uncertainty across the ray to the map noise");
-    v("stage1_mode", stage1_mode, one_of({"known_landmark", "msckf_nullspace", "ray_depth"}),
+    v("stage1_mode", stage1_mode, one_of({"known_landmark", "msckf_nullspace", "ray_depth", "plane"}),
       "stage-1 use of map points");
+    v("plane_radius_m", plane_radius_m, in_range(0.01, 100.0), "plane mode: surface fit radius, m");
+    v("plane_min_points", plane_min_points, in_range(3, 10000), "plane mode: map points a plane needs");
+    v("plane_max_rms_m", plane_max_rms_m, in_range(0.0, 10.0), "plane mode: roughest surface fitted, m");
     v("query_pose_source", query_pose_source, one_of({"estimated", "gt"}), "poses the rays are formed from");
     v("max_stage1_features", max_stage1_features, in_range(0, 256), "features queried in stage 1 per frame");
     v("max_rays_per_frame", max_rays_per_frame, in_range(0, 256), "rays per frame");

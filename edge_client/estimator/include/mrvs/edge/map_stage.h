@@ -15,6 +15,7 @@
 #include "mrvs/edge/map_association.h"
 #include "mrvs/edge/msckf_updater.h"
 #include "mrvs/edge/registered_map.h"
+#include "mrvs/edge/surface_map.h"
 
 namespace mrvs::edge {
 
@@ -28,6 +29,7 @@ struct MapFrameStats {
   int stage1_hits = 0;
   int stage1_accepted = 0;
   int stage1_dropped = 0;  ///< unmatched features left out (hit-rate rule)
+  int stage1_planes = 0;   ///< accepted points with a surface plane (stage1_mode plane)
   int registration_rays = 0;
   int registration_hits = 0;
   int registered = 0;
@@ -51,15 +53,17 @@ class MapStage {
   std::map<FeatureId, MapPoint> associate(const State& state, const FeatureDatabase& db,
                                           const io::Trajectory& groundtruth, std::vector<FeatureId>* ids,
                                           MapService& service, Clock::time_point deadline,
-                                          MapFrameStats* stats) const;
+                                          MapFrameStats* stats, SurfaceMap* surfaces = nullptr) const;
 
   /// Stage 2 registration of the features first seen at clone t_ns (stereo pairs): accepted
   /// hits enter the state as points with the map's variance, while there is room in the
-  /// state and in `grid`; returns their ids.
+  /// state and in `grid`; returns their ids. Every hit (of either call) goes into `surfaces`
+  /// when given; associate() gives stage 1's points their surface plane from it (stage1_mode
+  /// plane).
   std::vector<FeatureId> register_new(State& state, const FeatureDatabase& db,
                                       const io::Trajectory& groundtruth, TimestampNs t_ns,
                                       RegisteredMap* grid, MapService& service, Clock::time_point deadline,
-                                      MapFrameStats* stats) const;
+                                      MapFrameStats* stats, SurfaceMap* surfaces = nullptr) const;
 
   /// The registered points suitable for stage 2: those observed at t_ns and within
   /// registered_neighbourhood voxels of another observed registered point's voxel.
@@ -71,8 +75,10 @@ class MapStage {
  private:
   /// Adds the accepted hit X of `ray` as a registered point of `track` (independent of the
   /// state, with the map's variance).
+  /// With `plane` (stage1_mode plane) the query pose's uncertainty moves the point along the
+  /// surface (a covariance across the normal).
   void add_registered_point(State& state, const FeatureTrack& track, const FeatureRay& ray, const Vec3d& X,
-                            TimestampNs t_ns) const;
+                            TimestampNs t_ns, const SurfacePlane* plane = nullptr) const;
   /// Sends `rays` within the deadline; the hits (empty vector when not answered).
   std::vector<voxel::RayHit> query(MapService& service, const std::vector<FeatureRay>& rays,
                                    TimestampNs stamp_ns, Clock::time_point deadline,

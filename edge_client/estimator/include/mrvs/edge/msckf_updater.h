@@ -10,6 +10,7 @@
 #include "mrvs/edge/feature_database.h"
 #include "mrvs/edge/feature_measurement.h"
 #include "mrvs/edge/state_helper.h"
+#include "mrvs/edge/surface_map.h"
 #include "mrvs/edge/triangulation.h"
 
 namespace mrvs::edge {
@@ -52,6 +53,8 @@ struct MapPoint {
   /// map is uncertain across the ray by the query pose's uncertainty (MapOptions::
   /// association_noise); zero otherwise.
   Mat3d association = Mat3d::Zero();
+  /// The map's surface around the point (Stage1Mode::kPlane); nullopt when none was fitted.
+  std::optional<SurfacePlane> plane;
 };
 
 /// How stage 1 uses a map point.
@@ -62,8 +65,19 @@ enum class Stage1Mode {
   /// direction that observation's), so it moves with the estimated pose instead of pinning
   /// the pose to where the estimated ray met the map.
   kRayDepth,
+  /// The map's surface plane through the point: the feature, triangulated, must lie on it
+  /// (one row of the map point's and the plane's noise along the normal), then H_f is
+  /// projected out like the MSCKF. Where a ray from a wrong pose meets a surface moves along
+  /// the surface with the pose; only the offset along the normal is information. Without a
+  /// plane the feature is used as if it had no map point.
+  kPlane,
 };
 StatusOr<Stage1Mode> parse_stage1_mode(const std::string& name);
+
+/// Stacks the plane row of `point` (which has a plane) under the rows of its feature
+/// linearised at p_w: residual -n.(p_w - X), H_f n^T, nothing on the state; noise the map
+/// point's variance plus the surface's rms^2, scaled to the rows' sigma.
+void append_plane_row(const MapPoint& point, const Vec3d& p_w, FeatureRows* rows);
 
 class MsckfUpdater {
  public:
@@ -83,10 +97,11 @@ class MsckfUpdater {
   std::optional<Measurement> map_measurement(const State& state, const FeatureTrack& track,
                                              const MapPoint& point, Stage1Mode mode, MsckfStats* stats) const;
 
-  /// The null-space projected, gated rows of one feature (exposed for tests and issue 8).
-  /// nullopt when it is not usable; `stats` counts why.
+  /// The null-space projected, gated rows of one feature (exposed for tests and issue 8);
+  /// with `on_plane` (a map point with a plane) the plane row is stacked before the
+  /// projection (Stage1Mode::kPlane). nullopt when it is not usable; `stats` counts why.
   std::optional<Measurement> feature_measurement(const State& state, const FeatureTrack& track,
-                                                 MsckfStats* stats) const;
+                                                 MsckfStats* stats, const MapPoint* on_plane = nullptr) const;
 
   const MsckfOptions& options() const { return options_; }
 

@@ -143,6 +143,7 @@ class VioEstimator {
   MapStage map_stage_;
   MapService* map_ = nullptr;
   RegisteredMap registered_;
+  SurfaceMap surfaces_;  ///< every map point the cloud answered (stage1_mode plane's planes)
   MapStage::Clock::time_point deadline_;
   bool map_answering_ = false;  ///< the cloud answered the last request (else: triangulated points)
   std::optional<State> state_;
