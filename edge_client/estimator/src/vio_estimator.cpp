@@ -241,7 +241,7 @@ void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
   std::map<FeatureId, MapPoint> map_points;
   if (use_map)
     map_points =
-        map_stage_.associate(s, db_, groundtruth_, &msckf_ids, *map_, deadline_, &out->map, &surfaces_);
+        map_stage_.associate(s, db_, groundtruth_, &msckf_ids, *map_, deadline_, &out->map, surfaces());
   Clock::time_point t0 = Clock::now();
   out->msckf = msckf_.update(s, db_, msckf_ids, map_points, stage1_mode_);
   out->timing.msckf_ms = ms_since(t0);
@@ -277,7 +277,7 @@ void VioEstimator::update_points(const FeatureFrame& frame, const std::vector<Fe
   out->points.removed = static_cast<int>(removed.size());
   if (use_map && options_.map.register_new_features) {
     map_stage_.register_new(s, db_, groundtruth_, frame.t_ns, &registered_, *map_, deadline_, &out->map,
-                            &surfaces_);
+                            surfaces());
   }
   for (const auto& [id, p] : s.points) {
     db_.keep_from(id, frame.t_ns);  // points keep only their newest observations

@@ -144,6 +144,8 @@ class VioEstimator {
   MapService* map_ = nullptr;
   RegisteredMap registered_;
   SurfaceMap surfaces_;  ///< every map point the cloud answered (stage1_mode plane's planes)
+  /// The surfaces to feed and fit: only stage1_mode plane uses them.
+  SurfaceMap* surfaces() { return stage1_mode_ == Stage1Mode::kPlane ? &surfaces_ : nullptr; }
   MapStage::Clock::time_point deadline_;
   bool map_answering_ = false;  ///< the cloud answered the last request (else: triangulated points)
   std::optional<State> state_;
