@@ -126,7 +126,6 @@ std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const Feat
   stats->stage1_rays = static_cast<int>(rays.size());
   const std::vector<voxel::RayHit> hits = query(service, rays, state.newest_clone_ns(), deadline, stats);
   remember_surfaces(hits, map->origin, surfaces);
-  const bool planes = surfaces != nullptr && options_.stage1_mode == "plane";
   for (std::size_t i = 0; i < hits.size(); ++i) {
     if (!hits[i].hit) continue;
     ++stats->stage1_hits;
@@ -138,7 +137,7 @@ std::map<FeatureId, MapPoint> MapStage::associate(const State& state, const Feat
                      ray_anchor(state, track, rays[i], X), Mat3d::Zero(), std::nullopt};
     if (options_.association_noise && point.anchor)
       point.association = hit_covariance_across(state, *point.anchor);
-    if (planes) {
+    if (surfaces != nullptr) {
       point.plane = surfaces->plane_at(X, fit_options(options_));
       stats->stage1_planes += point.plane.has_value();
     }
@@ -184,7 +183,6 @@ std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabas
   stats->registration_rays = static_cast<int>(rays.size());
   const std::vector<voxel::RayHit> hits = query(service, rays, t_ns, deadline, stats);
   remember_surfaces(hits, map->origin, surfaces);
-  const bool planes = surfaces != nullptr && options_.stage1_mode == "plane";
   for (std::size_t i = 0; i < hits.size(); ++i) {
     if (!hits[i].hit) continue;
     ++stats->registration_hits;
@@ -192,9 +190,9 @@ std::vector<FeatureId> MapStage::register_new(State& state, const FeatureDatabas
     const Vec3d X = map->origin + hits[i].point.cast<double>();
     const FeatureTrack& track = *db.find(rays[i].id);
     if (!accept_hit(state, groundtruth, track, rays[i], X, options_)) continue;
-    // stage1_mode plane: only hits on a surface, which slide along it with the pose.
+    // With surfaces (stage1_mode plane): only hits on a surface, which slide along it with the pose.
     std::optional<SurfacePlane> plane;
-    if (planes && !(plane = surfaces->plane_at(X, fit_options(options_)))) continue;
+    if (surfaces != nullptr && !(plane = surfaces->plane_at(X, fit_options(options_)))) continue;
     if (!grid->add(rays[i].id, X)) continue;
     add_registered_point(state, track, rays[i], X, t_ns, plane ? &*plane : nullptr);
     added.push_back(rays[i].id);

@@ -57,9 +57,9 @@ class MapStage {
 
   /// Stage 2 registration of the features first seen at clone t_ns (stereo pairs): accepted
   /// hits enter the state as points with the map's variance, while there is room in the
-  /// state and in `grid`; returns their ids. Every hit (of either call) goes into `surfaces`
-  /// when given; associate() gives stage 1's points their surface plane from it (stage1_mode
-  /// plane).
+  /// state and in `grid`; returns their ids. `surfaces` is given in stage1_mode plane only:
+  /// every hit (of either call) goes into it, associate() gives stage 1's points their
+  /// surface plane from it, and register_new() registers only hits with a plane.
   std::vector<FeatureId> register_new(State& state, const FeatureDatabase& db,
                                       const io::Trajectory& groundtruth, TimestampNs t_ns,
                                       RegisteredMap* grid, MapService& service, Clock::time_point deadline,
