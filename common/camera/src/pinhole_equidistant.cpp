@@ -9,9 +9,9 @@ namespace mrvs::camera {
 namespace {
 
 constexpr double kHalfPi = 1.57079632679489661923;
-constexpr int kMaxIterations = 100;
-constexpr double kStepTolerance = 1e-14;    // radians, relative to max(1, theta)
-constexpr double kMaxPixelResidual = 1e-9;  // pixels
+constexpr int kThetaMaxIterations = 100;
+constexpr double kThetaStepTolerance = 1e-14;    // radians, relative to max(1, theta)
+constexpr double kThetaMaxPixelResidual = 1e-9;  // pixels
 // Below these radii the closed forms lose precision (0/0 at r = 0); series are used.
 constexpr double kSeriesRadiusThetaOverR = 1e-6;
 constexpr double kSeriesRadiusG = 1e-2;
@@ -159,12 +159,12 @@ StatusOr<Vec2d> PinholeEquidistant::undistort(const Vec2d& uv) const {
   // Safeguarded 1D Newton on f(theta) = theta_d(theta) - td inside the bracket [lo, hi].
   double lo = 0.0, hi = max_theta_;
   double theta = std::min(td, hi);
-  for (int iter = 0; iter < kMaxIterations; ++iter) {
+  for (int iter = 0; iter < kThetaMaxIterations; ++iter) {
     const double f = theta_d(theta, k) - td;
     if (f == 0.0) break;
     (f < 0.0 ? lo : hi) = theta;
     const double newton = theta - f / theta_d_derivative(theta, k);
-    if (std::abs(newton - theta) <= kStepTolerance * std::max(1.0, theta)) {
+    if (std::abs(newton - theta) <= kThetaStepTolerance * std::max(1.0, theta)) {
       theta = newton;
       break;
     }
@@ -174,9 +174,9 @@ StatusOr<Vec2d> PinholeEquidistant::undistort(const Vec2d& uv) const {
   const double scale = td > 0.0 ? std::tan(theta) / td : 1.0;
   const Vec2d xn = scale * xd;
   const double pixel_error = (distort(xn) - uv).norm();
-  if (!(pixel_error < kMaxPixelResidual)) {
+  if (!(pixel_error < kThetaMaxPixelResidual)) {
     return undistort_error(uv, fmt::format("did not converge (re-distortion error {} px > {} px)",
-                                           pixel_error, kMaxPixelResidual));
+                                           pixel_error, kThetaMaxPixelResidual));
   }
   return xn;
 }

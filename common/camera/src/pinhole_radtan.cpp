@@ -9,10 +9,10 @@
 namespace mrvs::camera {
 namespace {
 
-constexpr int kMaxIterations = 50;
-constexpr int kMaxHalvings = 30;
-constexpr double kStepTolerance = 1e-14;    // normalised units, relative to max(1, |xn|)
-constexpr double kMaxPixelResidual = 1e-9;  // pixels
+constexpr int kUndistortMaxIterations = 50;
+constexpr int kUndistortMaxHalvings = 30;
+constexpr double kUndistortStepTolerance = 1e-14;    // normalised units, relative to max(1, |xn|)
+constexpr double kUndistortMaxPixelResidual = 1e-9;  // pixels
 
 // Smallest radius r > 0 where d/dr [r (1 + k1 r^2 + k2 r^4)] = 1 + 3 k1 s + 5 k2 s^2 (s = r^2)
 // vanishes; +infinity when it stays positive.
@@ -105,7 +105,7 @@ StatusOr<Vec2d> PinholeRadtan::undistort(const Vec2d& uv) const {
   Vec2d xn = target;
   Mat2d J;
   Vec2d residual = distort_normalized(xn, dist, &J) - target;
-  for (int iter = 0; iter < kMaxIterations; ++iter) {
+  for (int iter = 0; iter < kUndistortMaxIterations; ++iter) {
     const double det = J.determinant();
     if (!(std::abs(det) > 0.0) || !std::isfinite(det)) break;
     const Vec2d step = -J.inverse() * residual;
@@ -114,7 +114,7 @@ StatusOr<Vec2d> PinholeRadtan::undistort(const Vec2d& uv) const {
     Vec2d candidate = xn + step;
     Mat2d J_candidate;
     Vec2d r_candidate = distort_normalized(candidate, dist, &J_candidate) - target;
-    for (int h = 0; h < kMaxHalvings && !(r_candidate.norm() <= residual.norm()); ++h) {
+    for (int h = 0; h < kUndistortMaxHalvings && !(r_candidate.norm() <= residual.norm()); ++h) {
       scale *= 0.5;
       candidate = xn + scale * step;
       r_candidate = distort_normalized(candidate, dist, &J_candidate) - target;
@@ -123,7 +123,7 @@ StatusOr<Vec2d> PinholeRadtan::undistort(const Vec2d& uv) const {
     xn = candidate;
     J = J_candidate;
     residual = r_candidate;
-    if (scale * step.norm() <= kStepTolerance * std::max(1.0, xn.norm())) break;
+    if (scale * step.norm() <= kUndistortStepTolerance * std::max(1.0, xn.norm())) break;
   }
   if (xn.allFinite() && !(xn.norm() < max_radius_)) {
     return absl::InvalidArgumentError(fmt::format(
@@ -132,11 +132,11 @@ StatusOr<Vec2d> PinholeRadtan::undistort(const Vec2d& uv) const {
         uv.x(), uv.y(), xn.norm(), max_radius_));
   }
   const double pixel_error = (distort(xn) - uv).norm();
-  if (!(pixel_error < kMaxPixelResidual)) {
+  if (!(pixel_error < kUndistortMaxPixelResidual)) {
     return absl::InvalidArgumentError(fmt::format(
         "undistort (radtan): pixel ({}, {}) did not converge (re-distortion error {} px > {} px); "
         "it is probably far outside the valid image area",
-        uv.x(), uv.y(), pixel_error, kMaxPixelResidual));
+        uv.x(), uv.y(), pixel_error, kUndistortMaxPixelResidual));
   }
   return xn;
 }

@@ -9,15 +9,15 @@
 
 #include "mrvs/config/options.h"
 #include "mrvs/config/yaml_document.h"
+#include "mrvs/geometry/angles.h"
 #include "mrvs/geometry/so3.h"
 
 namespace mrvs::config {
 namespace {
 
-constexpr double kRotationTolerance = 1e-6;      ///< max |R^T R - I| of a calibrated rotation
-constexpr double kLastRowTolerance = 1e-9;       ///< |last row - [0 0 0 1]|
-constexpr double kStereoChainTolerance = 1e-5;   ///< Kalibr T_cn_cnm1 vs the T_cam_imu chain
-constexpr double kRadToDeg = 57.29577951308232;  ///< 180 / pi
+constexpr double kRotationTolerance = 1e-6;     ///< max |R^T R - I| of a calibrated rotation
+constexpr double kLastRowTolerance = 1e-9;      ///< |last row - [0 0 0 1]|
+constexpr double kStereoChainTolerance = 1e-5;  ///< Kalibr T_cn_cnm1 vs the T_cam_imu chain
 
 /// Reads calibration values from one map of a document and collects every error.
 class Fields {

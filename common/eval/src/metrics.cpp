@@ -5,12 +5,11 @@
 #include <fmt/format.h>
 
 #include "mrvs/eval/trajectory_eval.h"
+#include "mrvs/geometry/angles.h"
 #include "mrvs/geometry/quaternion.h"
 
 namespace mrvs::eval {
 namespace {
-
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 /// Rotation angle (deg) between two orientations.
 double angle_deg(const Quatd& a, const Quatd& b) { return quat::angular_distance(a, b) * kRadToDeg; }

@@ -6,12 +6,11 @@
 
 #include <fmt/format.h>
 
+#include "mrvs/geometry/angles.h"
 #include "mrvs/geometry/so3.h"
 
 namespace mrvs::eval {
 namespace {
-
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 /// Suffix of the machine-readable keys of an alignment ("" for none).
 std::string key_suffix(AlignmentMethod method) {

@@ -16,6 +16,7 @@
 
 #include <fmt/format.h>
 
+#include "mrvs/geometry/angles.h"
 #include "mrvs/geometry/so3.h"
 #include "mrvs/sim/map_io.h"
 
@@ -26,7 +27,6 @@ namespace fs = std::filesystem;
 
 constexpr std::size_t kChunkPoints = 65536;
 constexpr std::size_t kMaxHeaderBytes = 65536;
-constexpr double kPi = 3.14159265358979323846;
 
 std::string errno_text(int err) { return std::generic_category().message(err); }
 

@@ -16,6 +16,7 @@
 
 #include <fmt/format.h>
 
+#include "mrvs/geometry/angles.h"
 #include "mrvs/geometry/so3.h"
 #include "mrvs/sim/prior_map.h"
 #include "mrvs/sim/rng.h"
@@ -26,7 +27,6 @@ namespace {
 constexpr std::int64_t kMaxSamples = 200'000'000;
 /// The shadow ray ends this far in front of the sample (along the face normal).
 constexpr double kShadowEpsilonM = 1e-3;
-constexpr double kPi = 3.14159265358979323846;
 
 /// A face with unit axes.
 struct FaceFrame {

@@ -6,12 +6,12 @@
 #include <fmt/format.h>
 
 #include "layout.h"
+#include "mrvs/geometry/angles.h"
 #include "mrvs/sim/rng.h"
 
 namespace mrvs::sim::detail {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMinSize = 0.3;  ///< clutter box edge range, metres
 constexpr double kMaxSize = 1.2;
 constexpr double kInsideTolerance = 1e-5;  ///< float rounding of boxes flush with a wall

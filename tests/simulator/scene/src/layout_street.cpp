@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "layout.h"
+#include "mrvs/geometry/angles.h"
 #include "mrvs/sim/rng.h"
 #include "street.h"
 
@@ -16,7 +17,6 @@ using Vec2d = Eigen::Vector2d;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kThinStep = 1.0;  ///< route samples closer than this are dropped, metres
 constexpr double kAxisToleranceDeg = 2.0;
 constexpr double kMinLegLength = 5.0;

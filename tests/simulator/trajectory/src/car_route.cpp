@@ -6,13 +6,11 @@
 
 #include <fmt/format.h>
 
+#include "mrvs/geometry/angles.h"
 #include "mrvs/sim/rng.h"
 
 namespace mrvs::sim {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
 
 /// Exact unit vector of the axis direction quadrant q (0: +x, 1: +y, 2: -x, 3: -y).
 Vec2d axis_direction(int quadrant) {
