@@ -3,15 +3,12 @@
 #include <algorithm>
 #include <set>
 
+#include "mrvs/core/time.h"
 #include "mrvs/edge/feature_measurement.h"
 #include "mrvs/edge/state_helper.h"
 
 namespace mrvs::edge {
 namespace {
-
-double ms_since(MapStage::Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(MapStage::Clock::now() - t0).count();
-}
 
 SurfaceFitOptions fit_options(const MapOptions& o) {
   SurfaceFitOptions out;

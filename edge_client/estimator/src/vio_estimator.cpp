@@ -1,4 +1,5 @@
 #include "mrvs/edge/vio_estimator.h"
+#include "mrvs/core/time.h"
 
 #include <algorithm>
 #include <chrono>
@@ -15,10 +16,6 @@ using Clock = std::chrono::steady_clock;
 /// Map points kept per plane_radius_m cell of the SurfaceMap: a plane needs a few, a fit of
 /// more is no better and costs time.
 constexpr int kSurfacePointsPerCell = 16;
-
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 ImuNoise scaled_noise(const config::ImuCalibration& imu, double k) {
   return {k * imu.gyroscope_noise_density, k * imu.accelerometer_noise_density, k * imu.gyroscope_random_walk,

@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "mrvs/core/time.h"
 #include "mrvs/edge/pixel_selector.h"
 #include "mrvs/edge/stereo_geometry.h"
 
@@ -18,10 +19,6 @@ namespace mrvs::edge {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 Vec2d to_vec(const cv::Point2f& p) { return Vec2d(p.x, p.y); }
 

@@ -2,6 +2,7 @@
 // Time convention: every timestamp in this project is an int64 count of nanoseconds
 // (`TimestampNs`, variables named `t_ns`). Doubles appear only at the edges (printing,
 // integration step lengths) and are never used as keys.
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -32,5 +33,10 @@ StatusOr<TimestampNs> parse_nanoseconds(std::string_view text);
 /// Formats ns as seconds with exactly 9 decimals ("1403715273.262142976"); the inverse of
 /// parse_decimal_seconds.
 std::string format_seconds(TimestampNs t_ns);
+
+/// Wall time in milliseconds (steady clock) since t0: the per-frame timing columns.
+inline double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
 
 }  // namespace mrvs
