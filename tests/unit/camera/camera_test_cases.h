@@ -9,10 +9,10 @@
 #include <gtest/gtest.h>
 
 #include "mrvs/camera/camera_model.h"
+#include "mrvs/geometry/angles.h"
 
 namespace mrvs::camera::test {
 
-inline constexpr double kPi = 3.14159265358979323846;
 
 struct CameraCase {
   std::string name;

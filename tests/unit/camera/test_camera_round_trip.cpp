@@ -20,7 +20,7 @@ using test::CameraCase;
 
 // Distorted normalised radius theta_d at 90 degrees off axis for an equidistant camera.
 double theta_d_at_90_degrees(const Params& p) {
-  const double t = test::kPi / 2.0;
+  const double t = kPi / 2.0;
   const double t2 = t * t;
   return t * (1.0 + p[4] * t2 + p[5] * t2 * t2 + p[6] * t2 * t2 * t2 + p[7] * t2 * t2 * t2 * t2);
 }
@@ -100,7 +100,7 @@ TEST_P(CameraRoundTripTest, UndistortOfDistortOverAGridOfPoints) {
   if (is_equidistant()) {
     for (int i = 0; i < 500; ++i) {
       for (int j = 0; j < 720; ++j) {
-        check(test::from_angles(89.99 * test::kPi / 180.0 * i / 499.0, 2.0 * test::kPi * j / 720.0));
+        check(test::from_angles(89.99 * kPi / 180.0 * i / 499.0, 2.0 * kPi * j / 720.0));
       }
     }
   } else {
@@ -201,7 +201,7 @@ TEST(Undistort, EquidistantRejectsPixelsBeyondTheFold) {
   // Monotonic models: the limit is 90 degrees.
   const auto tumvi = PinholeEquidistant::create(512, 512, test::tumvi_cam0().params);
   ASSERT_TRUE(tumvi.ok());
-  EXPECT_EQ((*tumvi)->max_monotonic_theta(), test::kPi / 2.0);
+  EXPECT_EQ((*tumvi)->max_monotonic_theta(), kPi / 2.0);
 }
 
 TEST(Undistort, EquidistantReportsPixelsBeyondNinetyDegrees) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "mrvs/eval/trajectory_eval.h"
+#include "mrvs/geometry/angles.h"
 #include "mrvs/geometry/quaternion.h"
 #include "mrvs/test/numeric_jacobian.h"
 #include "synthetic.h"
@@ -13,7 +14,6 @@ namespace {
 
 constexpr TimestampNs kT0 = 1'000'000'000'000;
 constexpr DurationNs kMs = 1'000'000;
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 io::Trajectory smooth_ground_truth(std::uint32_t seed, int n, DurationNs dt_ns = 50 * kMs) {
   const synthetic::SmoothTrajectory traj(seed);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "mrvs/eval/trajectory_eval.h"
+#include "mrvs/geometry/angles.h"
 #include "mrvs/geometry/quaternion.h"
 #include "synthetic.h"
 
@@ -12,7 +13,6 @@ namespace {
 
 constexpr TimestampNs kT0 = 2'000'000'000'000;
 constexpr DurationNs kMs = 1'000'000;
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 Association associate_or_die(const io::Trajectory& est, const io::Trajectory& gt) {
   auto a = associate(est, gt, {});

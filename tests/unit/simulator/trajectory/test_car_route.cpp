@@ -12,9 +12,6 @@
 namespace mrvs::sim {
 namespace {
 
-using test::kRadToDeg;
-
-constexpr double kPi = 3.14159265358979323846;
 constexpr std::uint64_t kSeed = 7;
 
 TEST(CarRoute, TestRouteGeometry) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "mrvs/geometry/angles.h"
 #include "mrvs/geometry/quaternion.h"
 #include "mrvs/geometry/se3.h"
 #include "mrvs/io/trajectory_io.h"
@@ -13,7 +14,7 @@
 
 namespace mrvs::sim::test {
 
-constexpr double kRadToDeg = 57.29577951308232;
+using mrvs::kRadToDeg;
 
 /// The real EuRoC ground truth `name` (e.g. "V1_01_easy.txt"); empty (and a test failure)
 /// when it cannot be read.
