@@ -16,6 +16,15 @@ double angle_deg(const Quatd& a, const Quatd& b) { return quat::angular_distance
 
 }  // namespace
 
+double heading_about_z_deg(const Quatd& q) {
+  // The twist about z of q = (w, x, y, z) is the rotation (cos(a / 2), 0, 0, sin(a / 2)) with
+  // a = 2 atan2(z, w); q and -q are the same rotation, so a is wrapped into (-180, 180].
+  double a = 2.0 * std::atan2(q.z(), q.w()) * kRadToDeg;
+  if (a > 180.0) a -= 360.0;
+  if (a <= -180.0) a += 360.0;
+  return a;
+}
+
 StatusOr<ErrorStats> compute_stats(const std::vector<double>& errors) {
   if (errors.empty()) return absl::InvalidArgumentError("no errors to summarise (empty set)");
   ErrorStats s;
@@ -53,13 +62,19 @@ StatusOr<AteResult> compute_ate(const Association& association, const Alignment&
   out.alignment = alignment;
   out.position_errors_m.reserve(association.matches.size());
   out.rotation_errors_deg.reserve(association.matches.size());
+  out.heading_errors_deg.reserve(association.matches.size());
+  std::vector<double> heading_magnitudes;
   for (const Match& m : association.matches) {
     const SE3d T_wgt_b_est = alignment.apply(m.T_west_b);
     out.position_errors_m.push_back((m.T_wgt_b.translation() - T_wgt_b_est.translation()).norm());
     out.rotation_errors_deg.push_back(angle_deg(m.T_wgt_b.quaternion(), T_wgt_b_est.quaternion()));
+    const Quatd world_error = m.T_wgt_b.quaternion() * T_wgt_b_est.quaternion().conjugate();
+    out.heading_errors_deg.push_back(heading_about_z_deg(world_error));
+    heading_magnitudes.push_back(std::abs(out.heading_errors_deg.back()));
   }
   MRVS_ASSIGN_OR_RETURN(out.position_m, compute_stats(out.position_errors_m));
   MRVS_ASSIGN_OR_RETURN(out.rotation_deg, compute_stats(out.rotation_errors_deg));
+  MRVS_ASSIGN_OR_RETURN(out.heading_deg, compute_stats(heading_magnitudes));
   return out;
 }
 

@@ -89,10 +89,11 @@ std::string json_ate(const AteResult& ate) {
   const Quatd q = a.T_gt_est.quaternion();
   return fmt::format(
       R"({{"alignment": "{}", "scale": {}, "t_gt_est_m": [{}, {}, {}], "q_gt_est_xyzw": [{}, {}, {}, {}], )"
-      R"("position_m": {}, "rotation_deg": {}}})",
+      R"("position_m": {}, "rotation_deg": {}, "heading_deg": {}, "heading_final_deg": {}}})",
       alignment_name(a.method), json_number(a.scale), json_number(t.x()), json_number(t.y()),
       json_number(t.z()), json_number(q.x()), json_number(q.y()), json_number(q.z()), json_number(q.w()),
-      json_stats(ate.position_m), json_stats(ate.rotation_deg));
+      json_stats(ate.position_m), json_stats(ate.rotation_deg), json_stats(ate.heading_deg),
+      json_number(ate.heading_errors_deg.back()));
 }
 
 std::string json_rpe(const std::optional<RpeResult>& rpe) {
@@ -168,6 +169,12 @@ std::string format_summary(const EvaluationReport& r) {
   out += "ATE rotation [deg]:\n" + header;
   for (const AteResult& ate : r.ate)
     append_stats_row(&out, alignment_name(ate.alignment.method), ate.rotation_deg);
+  out += "ATE heading [deg] (about the ground truth's z axis, magnitude; final: signed, at the end):\n" +
+         header.substr(0, header.size() - 1) + fmt::format(" {:>10}\n", "final");
+  for (const AteResult& ate : r.ate) {
+    append_stats_row(&out, alignment_name(ate.alignment.method), ate.heading_deg);
+    out.insert(out.size() - 1, fmt::format(" {:>10.6f}", ate.heading_errors_deg.back()));
+  }
   for (const AteResult& ate : r.ate) {
     const Alignment& a = ate.alignment;
     if (a.method == AlignmentMethod::kNone) continue;
@@ -194,6 +201,11 @@ std::string format_key_values(const EvaluationReport& r) {
                    suffix, ate.rotation_deg.rmse);
     if (ate.alignment.method == AlignmentMethod::kSim3)
       fmt::format_to(it, "SIM3_SCALE: {:.9g}\n", ate.alignment.scale);
+  }
+  for (const AteResult& ate : r.ate) {  // after the lines above, which scripts read in this order
+    const std::string suffix = key_suffix(ate.alignment.method);
+    fmt::format_to(it, "ATE_HEADING_RMSE{}_deg: {:.9g}\nATE_HEADING_FINAL{}_deg: {:.9g}\n", suffix,
+                   ate.heading_deg.rmse, suffix, ate.heading_errors_deg.back());
   }
   const auto rpe_lines = [&](const char* prefix, double delta, const std::optional<RpeResult>& rpe) {
     if (!(delta > 0.0)) return;

@@ -119,6 +119,51 @@ TEST(EvalRpe, ConstantYawDriftPerMetreOnACurvedPath) {
   EXPECT_NEAR(rpe->translation_m.rmse, compute_stats(expected_trans)->rmse, 1e-9);
 }
 
+TEST(EvalAte, HeadingIsTheTwistAboutZ) {
+  // A rotation about z, then any tilt about a horizontal axis applied before it: the heading
+  // is exactly the z angle (the tilt's swing does not leak in), wrapped into (-180, 180].
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> yaw(-179.0, 179.0), tilt(-60.0, 60.0), dir(0.0, 2.0 * kPi);
+  for (int trial = 0; trial < 200; ++trial) {
+    const double psi = yaw(rng);
+    const double a = dir(rng);
+    const Quatd q = so3::exp_quat<double>(Vec3d(0, 0, psi * kDegToRad)) *
+                    so3::exp_quat<double>(tilt(rng) * kDegToRad * Vec3d(std::cos(a), std::sin(a), 0.0));
+    EXPECT_NEAR(heading_about_z_deg(q), psi, 1e-9) << trial;
+    EXPECT_NEAR(heading_about_z_deg(Quatd(-q.coeffs())), psi, 1e-9) << trial;  // same rotation
+  }
+  EXPECT_NEAR(heading_about_z_deg(so3::exp_quat<double>(Vec3d(0, 0, 190.0 * kDegToRad))), -170.0, 1e-9);
+  EXPECT_NEAR(heading_about_z_deg(so3::exp_quat<double>(Vec3d(0.3, -0.2, 0.0))), 0.0, 1e-12);
+}
+
+TEST(EvalAte, HeadingErrorOfAYawDriftAndNotOfATilt) {
+  // The estimate's world turns about z at 0.5 deg/s (a gyro bias's heading drift), and
+  // separately every pose tilts 2 deg about a horizontal world axis (roll / pitch, no heading):
+  // the signed heading error is minus the drift's angle, the tilt gives none.
+  const synthetic::SmoothTrajectory traj(24);
+  const io::Trajectory gt = synthetic::sample([&](double t) { return traj.pose(t); }, kT0, 10 * kMs, 2000);
+  const double rate_deg = 0.5;
+  io::Trajectory drift = gt, tilt = gt;
+  for (std::size_t i = 0; i < gt.size(); ++i) {
+    const double psi = rate_deg * to_seconds(gt[i].t_ns - kT0) * kDegToRad;
+    drift[i].T_w_b = SE3d(so3::exp_quat<double>(Vec3d(0, 0, psi)), Vec3d::Zero()) * gt[i].T_w_b;
+    const Vec3d axis(std::cos(0.01 * i), std::sin(0.01 * i), 0.0);  // horizontal, turning
+    tilt[i].T_w_b.set_quaternion(so3::exp_quat<double>(2.0 * kDegToRad * axis) * gt[i].T_w_b.quaternion());
+  }
+  const Alignment none{AlignmentMethod::kNone, SE3d(), 1.0};
+  auto ate = compute_ate(associate_or_die(drift, gt), none);
+  ASSERT_TRUE(ate.ok()) << ate.status();
+  ASSERT_EQ(ate->heading_errors_deg.size(), gt.size());
+  for (std::size_t i = 0; i < gt.size(); i += 97)
+    EXPECT_NEAR(ate->heading_errors_deg[i], -rate_deg * to_seconds(gt[i].t_ns - kT0), 1e-9) << i;
+  EXPECT_NEAR(ate->heading_deg.max, rate_deg * to_seconds(gt.back().t_ns - kT0), 1e-9);
+  EXPECT_NEAR(ate->heading_deg.max, ate->rotation_deg.max, 1e-9);  // all of it is heading
+  auto tilted = compute_ate(associate_or_die(tilt, gt), none);
+  ASSERT_TRUE(tilted.ok()) << tilted.status();
+  EXPECT_NEAR(tilted->rotation_deg.min, 2.0, 1e-9);
+  EXPECT_LT(tilted->heading_deg.max, 1e-9);
+}
+
 TEST(EvalRpe, MatchesBruteForceAndIgnoresRigidAlignment) {
   const synthetic::SmoothTrajectory traj(23);
   const io::Trajectory gt = synthetic::sample([&](double t) { return traj.pose(t); }, kT0, 20 * kMs, 1500);

@@ -49,6 +49,8 @@ TEST(EvalReport, EvaluatesAllAlignmentsAndPrintsKeyValues) {
   EXPECT_LT(value_of(kv, "ATE_RMSE_SIM3_m"), 1e-7) << kv;
   EXPECT_LT(value_of(kv, "ATE_RMSE_FIRST_m"), 1e-7) << kv;
   EXPECT_NEAR(value_of(kv, "ATE_ROT_RMSE_deg"), 0.0, 1e-7) << kv;
+  EXPECT_NEAR(value_of(kv, "ATE_HEADING_RMSE_deg"), 0.0, 1e-7) << kv;
+  EXPECT_NEAR(value_of(kv, "ATE_HEADING_FINAL_SE3_deg"), 0.0, 1e-7) << kv;
   EXPECT_NEAR(value_of(kv, "SIM3_SCALE"), 1.0, 1e-7) << kv;
   EXPECT_NEAR(value_of(kv, "RPE_TRANS_RMSE_m"), 0.0, 1e-7) << kv;
   EXPECT_NEAR(value_of(kv, "RPE_ROT_RMSE_deg"), 0.0, 1e-7) << kv;
@@ -59,10 +61,12 @@ TEST(EvalReport, EvaluatesAllAlignmentsAndPrintsKeyValues) {
 
   const std::string summary = format_summary(*report);
   EXPECT_NE(summary.find("ATE position [m]"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("ATE heading [deg]"), std::string::npos) << summary;
   EXPECT_NE(summary.find("1 unmatched"), std::string::npos) << summary;
   const std::string json = to_json(*report);
   EXPECT_NE(json.find("\"matched_poses\": " + std::to_string(est.size() - 1)), std::string::npos) << json;
   EXPECT_NE(json.find("\"alignment\": \"sim3\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"heading_final_deg\": "), std::string::npos) << json;
 }
 
 TEST(EvalReport, MissingRpeIsANoteAndNan) {

@@ -129,7 +129,18 @@ struct AteResult {
   ErrorStats rotation_deg;                  ///< angle of R_gt_b^-1 * R_gt_est * R_est_b, degrees
   std::vector<double> position_errors_m;    ///< per match
   std::vector<double> rotation_errors_deg;  ///< per match
+  /// Heading error, the one rotation visual-inertial odometry cannot observe: the angle about
+  /// the ground-truth world's z axis (up in EuRoC, KAIST and the generated worlds) of the world
+  /// rotation error R_gt_b * R_est_b^-1 (its twist about z), per match, signed (truth's heading
+  /// minus the estimate's, in (-180, 180]); the statistics are of its magnitude.
+  ErrorStats heading_deg;
+  std::vector<double> heading_errors_deg;
 };
+
+/// The signed angle, in degrees, about the z axis of the rotation `q` (the twist of its
+/// swing-twist decomposition about z: exact for rotations about z, and the tilt of any swing
+/// does not leak into it), in (-180, 180].
+double heading_about_z_deg(const Quatd& q);
 
 /// ATE of the matches after `alignment`. InvalidArgument when there are no matches.
 StatusOr<AteResult> compute_ate(const Association& association, const Alignment& alignment);
