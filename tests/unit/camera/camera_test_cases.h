@@ -13,7 +13,6 @@
 
 namespace mrvs::camera::test {
 
-
 struct CameraCase {
   std::string name;
   DistortionModel model;
