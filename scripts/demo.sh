@@ -8,8 +8,8 @@
 #   3. start cloud_server on it and run edge_client against it over Fast DDS on loopback
 #      (inside a private network namespace when root): the paper's two-stage update,
 #   4. run edge_client again as plain VIO (--no-map),
-#   5. print the ATE of both against the ground truth, the payload per frame, the round trip
-#      and the per-frame timing columns, and write a trajectory plot (PNG).
+#   5. print the ATE and heading error of both against the ground truth, the payload per frame,
+#      the round trip and the per-frame timing columns, and write a trajectory plot (PNG).
 #
 # Usage: scripts/demo.sh [--out DIR] [--duration S]   (defaults: build/demo, 30 s)
 # Environment: MRVS_SHARED_DIR (default ../shared next to the repository).
@@ -68,7 +68,7 @@ ate() {  # ate TRAJ KEY
 }
 e=$out/map/edge.txt
 printf '%-28s %12s %12s\n' "" "with map" "plain VIO"
-for k in ATE_RMSE_m ATE_RMSE_SE3_m; do
+for k in ATE_RMSE_m ATE_RMSE_SE3_m ATE_HEADING_RMSE_deg; do
   printf '%-28s %12.4f %12.4f\n' "$k" "$(ate "$out/map/trajectory.txt" $k)" "$(ate "$out/plain/trajectory.txt" $k)"
 done
 for k in FRAME_MS_MEDIAN A_IMAGE_MS_MEDIAN B_TRACKING_MS_MEDIAN C_UPDATE_MS_MEDIAN D_SELECTION_MS_MEDIAN E_RAYS_MS_MEDIAN; do
