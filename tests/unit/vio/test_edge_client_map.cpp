@@ -134,7 +134,7 @@ TEST(EdgeClientMap, ACloudKilledMidRunLeavesPlainVioAndIsUsedAgainAfterARestart)
   EXPECT_NE(r.output.find("the cloud answers again"), std::string::npos) << r.output;
   const double frames = value_of(r.output, "FRAMES");
   EXPECT_EQ(frames, 480.0);
-  EXPECT_GT(value_of(r.output, "FRAMES_WITHOUT_MAP"), 5.0);
+  EXPECT_GT(value_of(r.output, "FRAMES_WITHOUT_MAP"), 5.0) << r.output;
   EXPECT_LT(value_of(r.output, "FRAMES_WITHOUT_MAP"), 0.9 * frames);
   EXPECT_GT(value_of(r.output, "POSES"), 0.9 * frames);
   EXPECT_LT(ate_raw(dir / "traj.txt"), 0.08);
