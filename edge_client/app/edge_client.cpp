@@ -9,8 +9,6 @@
 //
 // stdout: "KEY: value" lines (frames, timing columns a-e, link figures); logs and progress
 // on stderr. Exit codes: 0 success, 1 data error (named), 2 usage or configuration error.
-#include <malloc.h>
-
 #include <chrono>
 #include <string>
 #include <vector>
@@ -22,6 +20,7 @@
 
 #include "mrvs/config/yaml_document.h"
 #include "mrvs/core/cli.h"
+#include "mrvs/core/memory.h"
 #include "mrvs/core/stats.h"
 #include "mrvs/edge/dds_map_service.h"
 #include "mrvs/edge/vio_system.h"
@@ -341,20 +340,11 @@ int run(const Args& a) {
   return mrvs::kExitOk;
 }
 
-/// glibc serves blocks over 128 kB (the estimator's n x m temporaries: P H^T, the whitened gain,
-/// Eigen's GEMM packing) with mmap and gives them back at every free, so each update paid page
-/// faults for fresh zeroed pages: with 100 points in the state that was half the update (the
-/// demo clip's median update 22.1 -> 12-13 ms, frame 29.3 -> 16-18 ms). Kept on the heap, the
-/// memory is reused; the peak is what the estimator needs anyway.
-void keep_large_blocks_on_the_heap() {
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest
-  mallopt(M_TRIM_THRESHOLD, 512 << 20);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  keep_large_blocks_on_the_heap();
+  if (!mrvs::keep_large_blocks_on_the_heap())
+    spdlog::warn("glibc refused the malloc settings: updates are slower");
   CLI::App app{"Edge client: stereo VIO with the cloud map over Fast DDS (or plain, --no-map).",
                "edge_client"};
   Args args;

@@ -3,7 +3,7 @@
 // on a generated V1_01 clip (realistic preset, 20 s from the still start, images in memory),
 // as edge_client runs it without the map. Counters: median / p95 of the frame time after
 // initialisation, and of the paper's columns (a) image processing, (b) extraction and
-// tracking, (c) state update.
+// tracking, (c) state update. Allocator settings as in edge_client (mrvs/core/memory.h).
 //   build/bin/bench_vio [--benchmark_repetitions=3]
 #include <array>
 #include <memory>
@@ -13,6 +13,7 @@
 #include <opencv2/core/utility.hpp>
 
 #include "mrvs/config/options.h"
+#include "mrvs/core/memory.h"
 #include "mrvs/core/stats.h"
 #include "mrvs/edge/vio_system.h"
 #include "mrvs/io/dataset.h"
@@ -95,4 +96,12 @@ BENCHMARK(BM_EdgeFrame)->Iterations(1)->Unit(benchmark::kSecond);
 
 }  // namespace
 
-BENCHMARK_MAIN();
+// As edge_client runs: large temporaries stay on the heap (mrvs/core/memory.h).
+int main(int argc, char** argv) {
+  mrvs::keep_large_blocks_on_the_heap();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
