@@ -33,6 +33,24 @@ void gather_neighbourhood(const LevelIndex& index, const Eigen::Vector3i& voxel,
   }
 }
 
+void gather_ball(const LevelIndex& index, const Eigen::Vector3d& centre, double radius_m,
+                 std::vector<Eigen::Vector3d>* out) {
+  const double r = index.resolution();
+  const Eigen::Vector3i lo = ((centre.array() - radius_m) / r).floor().cast<int>();
+  const Eigen::Vector3i hi = ((centre.array() + radius_m) / r).floor().cast<int>();
+  const double r2 = radius_m * radius_m;
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const std::uint32_t sorted = index.find_voxel(x, y, z);
+        if (sorted == kNoBrick) continue;
+        const Eigen::Vector3d p = index.position(sorted).cast<double>();
+        if ((p - centre).squaredNorm() <= r2) out->push_back(p);
+      }
+    }
+  }
+}
+
 namespace {
 
 /// Kasa fit of x^2 + y^2 + D x + E y + F = 0 to the points projected on (u, w) around c.

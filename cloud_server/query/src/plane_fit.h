@@ -4,6 +4,7 @@
 // voxel's 3 x 3 x 3 neighbourhood, and the query ray's intersection with that disk.
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -30,5 +31,9 @@ void gather_neighbourhood(const LevelIndex& index, const Eigen::Vector3i& voxel,
 /// nullopt otherwise (or on any NaN).
 std::optional<Eigen::Vector3d> plane_circle_intersection(const Neighbourhood& n, const Eigen::Vector3d& o,
                                                          const Eigen::Vector3d& v, double min_planarity);
+
+/// Stored points of `index` within `radius_m` of `centre` (map-local, m), appended to `out`.
+void gather_ball(const LevelIndex& index, const Eigen::Vector3d& centre, double radius_m,
+                 std::vector<Eigen::Vector3d>* out);
 
 }  // namespace mrvs::map::detail

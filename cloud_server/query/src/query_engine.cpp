@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "level_index.h"
+#include "mrvs/geometry/plane_fit.h"
 #include "plane_fit.h"
 #include "traversal.h"
 
@@ -247,6 +248,23 @@ std::optional<VoxelHit> QueryEngine::first_hit(int level, const Eigen::Vector3f&
     return std::nullopt;
   }
   return VoxelHit{index.original_index(hit.sorted), static_cast<float>(hit.t_entry)};
+}
+
+std::optional<Eigen::Vector3f> QueryEngine::surface_normal(int level, const Eigen::Vector3f& point) const {
+  if (impl_ == nullptr || level < 0 || static_cast<std::size_t>(level) >= impl_->levels.size() ||
+      !point.allFinite())
+    return std::nullopt;
+  const QueryOptions& o = impl_->options;
+  const detail::LevelIndex& index = impl_->levels[static_cast<std::size_t>(level)];
+  // At most kNormalHalfWidthVoxels voxels around the hit: (2 k + 1)^3 lookups per hit.
+  const double radius = std::min(o.normal_radius_m, kNormalHalfWidthVoxels * index.resolution());
+  std::vector<Eigen::Vector3d> near;
+  detail::gather_ball(index, point.cast<double>(), radius, &near);
+  if (static_cast<int>(near.size()) < o.normal_min_points) return std::nullopt;
+  const std::optional<PlaneFit> fit = fit_plane(near);
+  if (!fit || fit->rms_m > o.normal_max_rms_m || fit->extent_m < o.normal_min_extent * radius)
+    return std::nullopt;
+  return fit->normal.cast<float>();
 }
 
 const VoxelMap& QueryEngine::map() const {

@@ -74,18 +74,20 @@ void RayServer::handle(const wire::RayQueryBatch& request) {
       request, static_cast<std::size_t>(engine_.options().max_rays_per_batch), resolutions_);
   std::uint64_t hits = 0;
   hits_.assign(check.status == wire::STATUS_OK ? request.rays().size() : 0, std::nullopt);
+  normals_.assign(request.want_normals() ? hits_.size() : 0, Eigen::Vector3f::Zero());
   for (std::size_t i = 0; i < hits_.size(); ++i) {
     const map::QueryResult result = engine_.query(link::decode_ray(request.rays()[i]));
-    if (result.status == map::QueryStatus::kHit) {
-      hits_[i] = result.point;
-      ++hits;
-    }
+    if (result.status != map::QueryStatus::kHit) continue;
+    hits_[i] = result.point;
+    ++hits;
+    if (normals_.empty()) continue;
+    if (const auto n = engine_.surface_normal(result.level, result.point)) normals_[i] = *n;
   }
   if (check.status != wire::STATUS_OK) {
     spdlog::warn("client {} frame {}: {} ({})", request.client_id(), request.frame_seq(),
                  link::status_name(check.status), check.detail);
   }
-  wire::RayReplyBatch reply = link::encode_reply(request, check, hits_);
+  wire::RayReplyBatch reply = link::encode_reply(request, check, hits_, normals_);
   if (dds_->replies->write(&reply) != true) {
     spdlog::warn("client {} frame {}: the reply could not be written", request.client_id(),
                  request.frame_seq());

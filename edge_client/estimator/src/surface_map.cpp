@@ -3,8 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include <Eigen/Eigenvalues>
-
+#include "mrvs/geometry/plane_fit.h"
 #include "mrvs/voxel/voxel_key.h"
 
 namespace mrvs::edge {
@@ -44,21 +43,13 @@ std::optional<SurfacePlane> SurfaceMap::plane_at(const Vec3d& p, const SurfaceFi
     }
   }
   if (static_cast<int>(near.size()) < std::max(o.min_points, 3)) return std::nullopt;
-  Vec3d mean = Vec3d::Zero();
-  for (const Vec3d& q : near) mean += q;
-  mean /= static_cast<double>(near.size());
-  Mat3d cov = Mat3d::Zero();
-  for (const Vec3d& q : near) cov += (q - mean) * (q - mean).transpose();
-  cov /= static_cast<double>(near.size());
-  const Eigen::SelfAdjointEigenSolver<Mat3d> eig(cov);
-  const Vec3d l = eig.eigenvalues().cwiseMax(0.0);  // ascending
-  const double rms = std::sqrt(l(0));
-  if (rms > o.max_rms_m || std::sqrt(l(1)) < o.min_extent * o.radius_m) return std::nullopt;
+  const std::optional<PlaneFit> fit = fit_plane(near);
+  if (!fit || fit->rms_m > o.max_rms_m || fit->extent_m < o.min_extent * o.radius_m) return std::nullopt;
   SurfacePlane out;
-  out.normal = eig.eigenvectors().col(0).normalized();
-  out.centroid = mean;
-  out.rms_m = rms;
-  out.points = static_cast<int>(near.size());
+  out.normal = fit->normal;
+  out.centroid = fit->centroid;
+  out.rms_m = fit->rms_m;
+  out.points = fit->points;
   return out;
 }
 

@@ -16,14 +16,14 @@ std::optional<MapDescription> DdsMapService::description() {
 }
 
 MapReply DdsMapService::query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns,
-                              DurationNs timeout) {
+                              DurationNs timeout, bool want_normals) {
   MapReply out;
-  const QueryReply reply = client_->query(rays, stamp_ns, timeout);
+  const QueryReply reply = client_->query(rays, stamp_ns, timeout, want_normals);
   out.rtt_ns = reply.rtt_ns;
   out.answered = reply.outcome == QueryOutcome::kAnswered;
   if (out.answered) {
     out.hits.reserve(reply.answers.size());
-    for (const link::RayAnswer& a : reply.answers) out.hits.push_back({a.hit, a.point});
+    for (const link::RayAnswer& a : reply.answers) out.hits.push_back({a.hit, a.point, a.normal});
     if (outage_) {
       spdlog::warn(
           "the cloud answers again ({} requests without an answer since {} ns); the map is used again",

@@ -137,7 +137,7 @@ std::optional<QueryReply> MapClient::take_reply(std::uint64_t seq, std::size_t n
 }
 
 QueryReply MapClient::query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns,
-                            DurationNs timeout) {
+                            DurationNs timeout, bool want_normals) {
   const std::uint64_t seq = next_seq_++;
   const std::size_t limit =
       map_info_ ? std::min<std::size_t>(map_info_->max_rays_per_batch, wire::MAX_RAYS_PER_BATCH)
@@ -150,7 +150,7 @@ QueryReply MapClient::query(const std::vector<voxel::RayQuery>& rays, TimestampN
     refused.bad_ray_index = static_cast<std::uint32_t>(limit);
     return refused;
   }
-  wire::RayQueryBatch request = link::encode_request(client_id_, seq, stamp_ns, rays);
+  wire::RayQueryBatch request = link::encode_request(client_id_, seq, stamp_ns, rays, want_normals);
   dds::WaitSet waitset;
   dds_->replies->get_statuscondition().set_enabled_statuses(dds::StatusMask::data_available());
   waitset.attach_condition(dds_->replies->get_statuscondition());

@@ -1,5 +1,6 @@
 #include "mrvs/link/codec.h"
 
+#include <algorithm>
 #include <bitset>
 #include <cmath>
 
@@ -21,8 +22,9 @@ RequestCheck reject(wire::BatchStatus status, std::uint32_t index, std::string d
 }  // namespace
 
 wire::RayQueryBatch encode_request(std::uint32_t client_id, std::uint64_t frame_seq, TimestampNs stamp_ns,
-                                   const std::vector<voxel::RayQuery>& rays) {
+                                   const std::vector<voxel::RayQuery>& rays, bool want_normals) {
   wire::RayQueryBatch batch;
+  batch.want_normals(want_normals);
   batch.client_id(client_id);
   batch.frame_seq(frame_seq);
   batch.stamp_ns(stamp_ns);
@@ -77,7 +79,8 @@ RequestCheck check_request(const wire::RayQueryBatch& request, std::size_t max_r
 }
 
 wire::RayReplyBatch encode_reply(const wire::RayQueryBatch& request, const RequestCheck& check,
-                                 const std::vector<std::optional<Eigen::Vector3f>>& hits) {
+                                 const std::vector<std::optional<Eigen::Vector3f>>& hits,
+                                 const std::vector<Eigen::Vector3f>& normals) {
   wire::RayReplyBatch reply;
   reply.client_id(request.client_id());
   reply.frame_seq(request.frame_seq());
@@ -91,6 +94,10 @@ wire::RayReplyBatch encode_reply(const wire::RayQueryBatch& request, const Reque
     wire::MapPoint point;
     point.position({hits[i]->x(), hits[i]->y(), hits[i]->z()});
     reply.points().push_back(point);
+    if (!request.want_normals()) continue;
+    wire::SurfaceNormal normal;
+    normal.normal(encode_normal(i < normals.size() ? normals[i] : Eigen::Vector3f::Zero()));
+    reply.normals().push_back(normal);
   }
   return reply;
 }
@@ -108,15 +115,38 @@ StatusOr<std::vector<RayAnswer>> decode_reply(const wire::RayReplyBatch& reply, 
     return absl::DataLossError(
         fmt::format("reply {}: {} hit bits but {} points", reply.frame_seq(), set, reply.points().size()));
   }
+  if (!reply.normals().empty() && reply.normals().size() != set) {
+    return absl::DataLossError(
+        fmt::format("reply {}: {} normals for {} points", reply.frame_seq(), reply.normals().size(), set));
+  }
   std::vector<RayAnswer> answers(num_rays);
   std::size_t next = 0;
   for (std::size_t i = 0; i < num_rays; ++i) {
     if ((reply.hit_mask()[i / 8] >> (i % 8) & 1u) == 0) continue;
+    if (!reply.normals().empty()) answers[i].normal = decode_normal(reply.normals()[next].normal());
     const auto& p = reply.points()[next++].position();
     answers[i].hit = true;
     answers[i].point = Eigen::Vector3f(p[0], p[1], p[2]);
   }
   return answers;
+}
+
+std::array<std::int16_t, 3> encode_normal(const Eigen::Vector3f& n) {
+  std::array<std::int16_t, 3> out{0, 0, 0};
+  const float norm = n.norm();
+  if (!(norm > 0.5f) || !n.allFinite()) return out;
+  for (int k = 0; k < 3; ++k)
+    out[static_cast<std::size_t>(k)] =
+        static_cast<std::int16_t>(std::lround(32767.0f * std::clamp(n[k] / norm, -1.0f, 1.0f)));
+  return out;
+}
+
+Eigen::Vector3f decode_normal(const std::array<std::int16_t, 3>& w) {
+  const Eigen::Vector3f n(w[0], w[1], w[2]);
+  const float norm = n.norm();
+  // A unit vector encodes to a norm of 32767 within rounding: anything else is not one.
+  if (!(std::abs(norm - 32767.0f) < 4.0f)) return Eigen::Vector3f::Zero();
+  return n / norm;
 }
 
 wire::MapInfo encode_map_info(const MapInfo& info) {

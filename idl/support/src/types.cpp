@@ -9,7 +9,8 @@ class ResizedRequestType : public wire::RayQueryBatchPubSubType {
  public:
   explicit ResizedRequestType(std::size_t max_rays) {
     // encapsulation 4 + seq 8 + stamp 8 + client 4 + sequence length 4 + 32 per ray
-    m_typeSize = static_cast<std::uint32_t>(4 + 8 + 8 + 4 + 4 + 32 * max_rays);
+    // + want_normals 1, padded to 4
+    m_typeSize = static_cast<std::uint32_t>(4 + 8 + 8 + 4 + 4 + 32 * max_rays + 4);
   }
 };
 

@@ -411,15 +411,18 @@ TEST(MapMeasurement, HitsAlongTheEstimatedRaysCorrectDepthWithoutFalseConfidence
 class FakeCloud : public MapService {
  public:
   std::optional<MapDescription> description() override { return map; }
-  MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs, DurationNs timeout) override {
+  MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs, DurationNs timeout,
+                 bool want_normals) override {
     ++calls;
     last_timeout = timeout;
+    asked_normals = want_normals;
     MapReply reply;
     reply.answered = answer;
     if (!answer) return reply;
     for (const voxel::RayQuery& r : rays) {
       const Eigen::Vector3f p = r.origin + r.direction.normalized() * r.initial_distance;
-      reply.hits.push_back({true, p + offset_every_other(reply.hits.size())});
+      reply.hits.push_back(
+          {true, p + offset_every_other(reply.hits.size()), want_normals ? normal : Eigen::Vector3f::Zero()});
     }
     return reply;
   }
@@ -430,8 +433,10 @@ class FakeCloud : public MapService {
   bool answer = true;
   bool all_off = false;
   Eigen::Vector3f offset = Eigen::Vector3f::Zero();
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();  ///< answered with every hit when asked
   int calls = 0;
   DurationNs last_timeout = 0;
+  bool asked_normals = false;
 };
 
 struct StageScene {
@@ -487,6 +492,45 @@ TEST(MapStage, AcceptsConsistentAnswersAndRefusesInconsistentOnes) {
   MapStage(o, TriangulationOptions{})
       .associate(sc.s.state, sc.db, none, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &capped);
   EXPECT_EQ(capped.stage1_rays, 4);
+}
+
+TEST(MapStage, InPlaneModeCloudNormalsGiveEveryAcceptedHitItsPlane) {
+  StageScene sc;
+  const io::Trajectory none;
+  MapOptions o;
+  o.cloud_normals = true;  // asked only in plane mode
+  FakeCloud cloud;
+  cloud.normal = Eigen::Vector3f(0.0f, 0.6f, 0.8f);
+  MapFrameStats st;
+  SurfaceMap surfaces(0.5, 16);
+  MapStage(o, TriangulationOptions{})
+      .associate(sc.s.state, sc.db, none, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1), &st);
+  EXPECT_FALSE(cloud.asked_normals);
+  EXPECT_EQ(st.bytes_down, 20u * 12u + 3u);
+  o.stage1_mode = "plane";
+  const MapStage stage(o, TriangulationOptions{});
+  EXPECT_EQ(stage.max_rays(), 176) << "200 x 44 B per frame with 6 B more per hit";
+  MapFrameStats planes;
+  const auto points = stage.associate(sc.s.state, sc.db, none, &sc.ids, cloud,
+                                      Clock::now() + std::chrono::seconds(1), &planes, &surfaces);
+  EXPECT_TRUE(cloud.asked_normals);
+  EXPECT_EQ(planes.bytes_down, 20u * (12u + 6u) + 3u);
+  ASSERT_EQ(points.size(), 20u);
+  EXPECT_EQ(planes.stage1_planes, 20);
+  for (const auto& [id, point] : points) {
+    ASSERT_TRUE(point.plane.has_value()) << id;
+    EXPECT_LT((point.plane->normal - Vec3d(0.0, 0.6, 0.8)).norm(), 1e-6);
+    EXPECT_EQ(point.plane->centroid, point.p_w);
+    EXPECT_EQ(point.plane->rms_m, o.plane_max_rms_m);
+  }
+  // Without a normal (not planar there) the edge's own fit decides: 20 scattered points
+  // in an empty surface map give none.
+  cloud.normal = Eigen::Vector3f::Zero();
+  MapFrameStats none_planar;
+  SurfaceMap empty(0.5, 16);
+  stage.associate(sc.s.state, sc.db, none, &sc.ids, cloud, Clock::now() + std::chrono::seconds(1),
+                  &none_planar, &empty);
+  EXPECT_EQ(none_planar.stage1_planes, 0);
 }
 
 TEST(MapStage, WithoutAnAnswerTheFrameGoesOnWithoutMapPoints) {
@@ -654,6 +698,20 @@ TEST(TwoStageUpdate, TheMapCorrectsTheAlignmentErrorThatPlainVioKeeps) {
   EXPECT_GT(planes, 0);
   EXPECT_LE(planes, accepted);
   EXPECT_LT(e_plane, 0.5 * e_plain) << "plain " << e_plain << " plane " << e_plane;
+  // With the cloud's surface normals every accepted hit on a plane has one.
+  o.map.cloud_normals = true;
+  outs.clear();
+  const auto with_normals = test::run_estimator(*seq, o, nullptr, map.get(), &outs);
+  ASSERT_EQ(with_normals.size(), plain.size());
+  const double e_normals = test::ate_rmse(*seq, with_normals, false);
+  RecordProperty("ate_cloud_normals_m", std::to_string(e_normals));
+  int cloud_planes = 0;
+  for (const FrameOutput& f : outs) cloud_planes += f.map.stage1_planes;
+  RecordProperty("cloud_normal_planes", std::to_string(cloud_planes));
+  EXPECT_GT(cloud_planes, planes);
+  // Indoors the normal's neighbourhood is 6 voxels of the 0.03 m level (0.18 m), noisier
+  // than the 1 m it has outdoors: the indoor bar of the issue, 0.6x (measured 0.53x).
+  EXPECT_LT(e_normals, 0.6 * e_plain) << "plain " << e_plain << " cloud normals " << e_normals;
 }
 
 TEST(TwoStageUpdate, ASilentCloudGivesPlainVio) {

@@ -171,7 +171,8 @@ std::optional<MapDescription> LocalMapService::description() {
   return MapDescription{impl_->map->origin, impl_->map->resolutions(), 1};
 }
 
-MapReply LocalMapService::query(const std::vector<voxel::RayQuery>& batch, TimestampNs, DurationNs timeout) {
+MapReply LocalMapService::query(const std::vector<voxel::RayQuery>& batch, TimestampNs, DurationNs timeout,
+                                bool want_normals) {
   MapReply reply;
   ++queries;
   rays += static_cast<int>(batch.size());
@@ -183,7 +184,11 @@ MapReply LocalMapService::query(const std::vector<voxel::RayQuery>& batch, Times
   reply.answered = true;
   for (const voxel::RayQuery& r : batch) {
     const map::QueryResult q = impl_->engine->query(r);
-    reply.hits.push_back({q.status == map::QueryStatus::kHit, q.point});
+    voxel::RayHit hit{q.status == map::QueryStatus::kHit, q.point};
+    if (hit.hit && want_normals) {
+      if (const auto n = impl_->engine->surface_normal(q.level, q.point)) hit.normal = *n;
+    }
+    reply.hits.push_back(hit);
   }
   return reply;
 }

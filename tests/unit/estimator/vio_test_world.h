@@ -42,7 +42,8 @@ class LocalMapService : public MapService {
  public:
   static std::unique_ptr<LocalMapService> create(const SyntheticSequence& seq, bool refine = true);
   std::optional<MapDescription> description() override;
-  MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout) override;
+  MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout,
+                 bool want_normals) override;
   bool answer = true;
   bool announced = true;
   int queries = 0;

@@ -46,8 +46,8 @@ TEST(WireSizes, RequestBatchIsHeaderPlus32BytesPerRay) {
   auto full = make_batch(200);
   const auto empty_len = serialize(type, empty).length;
   const auto full_len = serialize(type, full).length;
-  // 4 B encapsulation + 8 seq + 8 stamp + 4 client + 4 sequence length.
-  EXPECT_EQ(empty_len, 28u);
+  // 4 B encapsulation + 8 seq + 8 stamp + 4 client + 4 sequence length + 1 want_normals.
+  EXPECT_EQ(empty_len, 29u);
   EXPECT_EQ(full_len - empty_len, 200u * 32u);
 }
 
@@ -63,8 +63,12 @@ TEST(WireSizes, ReplyBatchIsHeaderPlus12BytesPerHitAndOneBitPerRay) {
   const auto all_points = serialize(type, reply).length;
   EXPECT_EQ(all_points - no_points, 200u * 12u);
   // encapsulation 4 + seq 8 + client 4 + status 4 + bad index 4 + mask (4 + 25, padded to
-  // 32) + points length 4
-  EXPECT_EQ(no_points, 4u + 8u + 4u + 4u + 4u + 32u + 4u);
+  // 32) + points length 4 + normals length 4
+  EXPECT_EQ(no_points, 4u + 8u + 4u + 4u + 4u + 32u + 4u + 4u);
+  // Surface normals (when asked): 6 B more per hit.
+  reply.normals().resize(200);
+  EXPECT_EQ(serialize(type, reply).length - all_points, 200u * 6u);
+  EXPECT_EQ(mrvs::wire::SurfaceNormal::getCdrSerializedSize(mrvs::wire::SurfaceNormal()), 6u);
 }
 
 TEST(WireSizes, RoundTripPreservesEveryField) {

@@ -76,6 +76,49 @@ TEST(LinkCodec, InconsistentRepliesAreRejected) {
   EXPECT_FALSE(decode_reply(padding, 10).ok());
 }
 
+TEST(LinkCodec, NormalsTravelOnlyWhenAskedOnePerHitWithin1e4) {
+  std::mt19937 rng(5);
+  std::normal_distribution<float> g;
+  const std::size_t n = 50;
+  std::vector<std::optional<Eigen::Vector3f>> hits(n);
+  std::vector<Eigen::Vector3f> normals(n, Eigen::Vector3f::Zero());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i % 4 != 3) hits[i] = Eigen::Vector3f(float(i), 1.0f, 2.0f);
+    if (i % 5 != 2) normals[i] = Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized();
+  }
+  const auto rays = std::vector<voxel::RayQuery>(n);
+  const wire::RayReplyBatch plain =
+      encode_reply(encode_request(1, 2, 0, rays), RequestCheck{}, hits, normals);
+  EXPECT_TRUE(plain.normals().empty()) << "normals not asked for";
+  const wire::RayQueryBatch request = encode_request(1, 2, 0, rays, true);
+  EXPECT_TRUE(request.want_normals());
+  const wire::RayReplyBatch reply = encode_reply(request, RequestCheck{}, hits, normals);
+  EXPECT_EQ(reply.normals().size(), reply.points().size());
+  auto answers = decode_reply(reply, n);
+  ASSERT_TRUE(answers.ok()) << answers.status();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f& got = (*answers)[i].normal;
+    if (!hits[i] || normals[i].isZero()) {
+      EXPECT_TRUE(got.isZero()) << i;
+      continue;
+    }
+    EXPECT_LT((got - normals[i]).norm(), 1e-4f) << i;
+    EXPECT_NEAR(got.norm(), 1.0f, 1e-6f) << i;
+  }
+  wire::RayReplyBatch short_of_one = reply;
+  short_of_one.normals().pop_back();
+  EXPECT_THAT(std::string(decode_reply(short_of_one, n).status().message()), HasSubstr("normals"));
+}
+
+TEST(LinkCodec, NormalEncodingKeepsZeroAndRefusesWhatIsNotAUnitVector) {
+  EXPECT_EQ(encode_normal(Eigen::Vector3f::Zero()), (std::array<std::int16_t, 3>{0, 0, 0}));
+  EXPECT_EQ(encode_normal(Eigen::Vector3f(0.0f, 0.0f, 2.0f)), (std::array<std::int16_t, 3>{0, 0, 32767}));
+  EXPECT_EQ(encode_normal(Eigen::Vector3f(NAN, 0.0f, 1.0f)), (std::array<std::int16_t, 3>{0, 0, 0}));
+  EXPECT_TRUE(decode_normal({0, 0, 0}).isZero());
+  EXPECT_TRUE(decode_normal({100, 0, 0}).isZero()) << "a corrupt, far from unit encoding";
+  EXPECT_EQ(decode_normal({0, -32767, 0}), Eigen::Vector3f(0.0f, -1.0f, 0.0f));
+}
+
 TEST(LinkCodec, RequestChecks) {
   const std::vector<double> levels = {0.01, 0.02, 0.03};
   std::vector<voxel::RayQuery> rays(5);

@@ -134,6 +134,30 @@ TEST_F(LinkDds, RoundTripReturnsExactlyTheInProcessQuery) {
   EXPECT_GT(hits, 50);
 }
 
+TEST_F(LinkDds, SurfaceNormalsComeOnlyWhenAskedAndEqualTheInProcessFit) {
+  start_server();
+  auto client = make_client();
+  ASSERT_NE(client, nullptr);
+  ASSERT_TRUE(client->wait_for_map_info(5'000 * kMs).has_value());
+  const auto rays = rays_towards_floor(100, 3);
+  const edge::QueryReply plain = query_until_answered(*client, rays);
+  ASSERT_EQ(plain.outcome, edge::QueryOutcome::kAnswered);
+  for (const link::RayAnswer& a : plain.answers) EXPECT_TRUE(a.normal.isZero());
+  const edge::QueryReply reply = client->query(rays, 0, 1'000 * kMs, true);
+  ASSERT_EQ(reply.outcome, edge::QueryOutcome::kAnswered);
+  int normals = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const map::QueryResult local = engine_->query(rays[i]);
+    if (local.status != map::QueryStatus::kHit) continue;
+    const auto n = engine_->surface_normal(local.level, local.point);
+    ASSERT_TRUE(n.has_value()) << i << ": the floor is a plane";
+    EXPECT_LT((reply.answers[i].normal - *n).norm(), 1e-4f) << i;  // 3 x int16 on the wire
+    EXPECT_GT(std::abs(reply.answers[i].normal.z()), 0.999f) << i;
+    ++normals;
+  }
+  EXPECT_GT(normals, 30);
+}
+
 TEST_F(LinkDds, MissingServerTimesOutWithinTheDeadline) {
   auto client = make_client();
   ASSERT_NE(client, nullptr);

@@ -41,6 +41,9 @@ struct QueryResult {
   bool refined = false;     ///< point is a ray-plane intersection
 };
 
+/// The surface normal's neighbourhood reaches at most this many voxels from the hit.
+inline constexpr double kNormalHalfWidthVoxels = 6.0;
+
 struct QueryOptions : config::OptionsEquality<QueryOptions> {
   double search_range_m = 0.75;            ///< R0: DDA from d - R to d + R (indoor 0.75, outdoor 1.5)
   double threshold_offset_px = 0.5;        ///< in-view: perpendicular distance <= r + offset * d / f
@@ -48,6 +51,14 @@ struct QueryOptions : config::OptionsEquality<QueryOptions> {
   bool refine_plane_intersection = false;  ///< return the ray-plane intersection (algorithm.md 2.6)
   double min_planarity = 0.10;             ///< plane fit acceptance, (s2 - s3) / s1
   int max_rays_per_batch = 256;            ///< requests with more rays are refused
+  /// Surface normals (asked per request): the plane of the level's points within this
+  /// radius of the hit (at most kNormalHalfWidthVoxels voxels of the level), when at least
+  /// normal_min_points, at most normal_max_rms_m rough and spread over normal_min_extent *
+  /// radius along their second axis (not a line).
+  double normal_radius_m = 1.0;
+  int normal_min_points = 6;
+  double normal_max_rms_m = 0.1;
+  double normal_min_extent = 0.15;
 
   template <class V>
   void visit(V& v) {
@@ -58,6 +69,10 @@ struct QueryOptions : config::OptionsEquality<QueryOptions> {
     v("refine_plane_intersection", refine_plane_intersection, any(), "return ray-plane intersections");
     v("min_planarity", min_planarity, in_range(0.0, 1.0), "plane fit acceptance");
     v("max_rays_per_batch", max_rays_per_batch, in_range(1, 65536), "rays per request");
+    v("normal_radius_m", normal_radius_m, in_range(0.01, 10.0), "surface normal: fit radius, m");
+    v("normal_min_points", normal_min_points, in_range(3, 100000), "surface normal: points a plane needs");
+    v("normal_max_rms_m", normal_max_rms_m, in_range(0.0, 10.0), "surface normal: roughest plane, m");
+    v("normal_min_extent", normal_min_extent, in_range(0.0, 1.0), "surface normal: spread per radius");
   }
 };
 
@@ -95,6 +110,11 @@ class QueryEngine {
   /// direction or t_start > t_end.
   std::optional<VoxelHit> first_hit(int level, const Eigen::Vector3f& origin,
                                     const Eigen::Vector3f& direction, float t_start, float t_end) const;
+
+  /// The unit normal of the map's surface at `point` (map-local, m; a hit of `level`): the
+  /// plane of that level's points within options().normal_radius_m (see QueryOptions);
+  /// nullopt when they are not a plane, or for an unknown level. Thread-safe; allocates.
+  std::optional<Eigen::Vector3f> surface_normal(int level, const Eigen::Vector3f& point) const;
 
   const VoxelMap& map() const;
   const QueryOptions& options() const;

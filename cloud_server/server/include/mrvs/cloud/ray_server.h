@@ -65,6 +65,7 @@ class RayServer {
   std::unique_ptr<Dds> dds_;
   std::vector<double> resolutions_;
   std::vector<std::optional<Eigen::Vector3f>> hits_;  ///< reused per request
+  std::vector<Eigen::Vector3f> normals_;              ///< reused per request (when asked)
   mutable std::mutex counters_mutex_;
   std::map<std::uint32_t, ClientCounters> counters_;
   std::atomic<std::uint64_t> answered_{0};

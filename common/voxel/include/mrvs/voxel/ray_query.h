@@ -16,6 +16,8 @@ struct RayQuery {
 struct RayHit {
   bool hit = false;
   Eigen::Vector3f point = Eigen::Vector3f::Zero();  ///< map-local, m (valid when hit)
+  /// Unit normal of the map's surface around the hit when asked for and planar; else zero.
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();
 };
 
 }  // namespace mrvs::voxel

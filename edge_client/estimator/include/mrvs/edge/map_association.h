@@ -38,6 +38,9 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
   double plane_radius_m = 0.5;
   int plane_min_points = 6;
   double plane_max_rms_m = 0.05;
+  /// Plane mode: ask the cloud for the surface normal at each hit (6 more bytes per hit, wire
+  /// protocol 2) and use it instead of fitting the answered points.
+  bool cloud_normals = false;
   std::string query_pose_source = "estimated";  ///< estimated | gt (the paper's "w/ GT" rows)
   int max_stage1_features = 100;                ///< co-visible features queried per frame
   int max_rays_per_frame = 200;                 ///< stage 1 and registration together
@@ -74,6 +77,7 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
     v("plane_radius_m", plane_radius_m, in_range(0.01, 100.0), "plane mode: surface fit radius, m");
     v("plane_min_points", plane_min_points, in_range(3, 10000), "plane mode: map points a plane needs");
     v("plane_max_rms_m", plane_max_rms_m, in_range(0.0, 10.0), "plane mode: roughest surface fitted, m");
+    v("cloud_normals", cloud_normals, any(), "plane mode: surface normals from the cloud");
     v("query_pose_source", query_pose_source, one_of({"estimated", "gt"}), "poses the rays are formed from");
     v("max_stage1_features", max_stage1_features, in_range(0, 256), "features queried in stage 1 per frame");
     v("max_rays_per_frame", max_rays_per_frame, in_range(0, 256), "rays per frame");

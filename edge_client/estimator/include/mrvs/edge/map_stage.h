@@ -19,6 +19,11 @@
 
 namespace mrvs::edge {
 
+/// Application payload on the wire: a ray, a hit's point, a hit's surface normal (bytes).
+inline constexpr int kRayBytes = 32;
+inline constexpr int kHitBytes = 12;
+inline constexpr int kNormalBytes = 6;
+
 /// What the map did in one frame.
 struct MapFrameStats {
   bool available = false;  ///< the cloud's map description is known
@@ -71,6 +76,11 @@ class MapStage {
                                   TimestampNs t_ns) const;
 
   const MapOptions& options() const { return options_; }
+
+  /// Plane mode with cloud_normals: the requests ask for surface normals.
+  bool wants_normals() const;
+  /// Rays per frame: max_rays_per_frame, fewer with normals (the 200 x 44 B budget).
+  int max_rays() const;
 
  private:
   /// Adds the accepted hit X of `ray` as a registered point of `track` (independent of the

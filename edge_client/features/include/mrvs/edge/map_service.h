@@ -31,9 +31,10 @@ class MapService {
   virtual ~MapService() = default;
   /// The map's description once known (nullopt while the cloud is not heard from).
   virtual std::optional<MapDescription> description() = 0;
-  /// Answers `rays` (map-local) by `timeout` at the latest.
-  virtual MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns,
-                         DurationNs timeout) = 0;
+  /// Answers `rays` (map-local) by `timeout` at the latest; with `want_normals`, each hit
+  /// also carries the surface normal there (RayHit::normal).
+  virtual MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout,
+                         bool want_normals) = 0;
 };
 
 }  // namespace mrvs::edge

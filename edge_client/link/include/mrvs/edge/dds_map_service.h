@@ -14,7 +14,8 @@ class DdsMapService : public MapService {
   static StatusOr<std::unique_ptr<DdsMapService>> create(const MapClientOptions& options);
 
   std::optional<MapDescription> description() override;
-  MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout) override;
+  MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout,
+                 bool want_normals) override;
 
   const MapClientStats& stats() const { return client_->stats(); }
   MapClient& client() { return *client_; }

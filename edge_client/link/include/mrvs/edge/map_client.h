@@ -64,8 +64,10 @@ class MapClient {
   /// Waits up to `timeout` for map info.
   std::optional<link::MapInfo> wait_for_map_info(DurationNs timeout);
 
-  /// Sends `rays` (map-local) as frame `stamp_ns` and waits for the reply at most `timeout`.
-  QueryReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout);
+  /// Sends `rays` (map-local) as frame `stamp_ns` and waits for the reply at most `timeout`;
+  /// `want_normals` asks for the surface normal of each hit (RayAnswer::normal).
+  QueryReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout,
+                   bool want_normals = false);
 
   const MapClientStats& stats() const { return stats_; }
 
