@@ -16,6 +16,8 @@ BUILD_PACKAGES=(
   libeigen3-dev libopencv-dev libpcl-dev libceres-dev
   # configuration, command line, logging
   libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev libabsl-dev
+  # nearest neighbours (header-only): the cloud's localisation
+  libnanoflann-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
 )

@@ -1,6 +1,10 @@
 // edge_client: the edge process. Stereo VIO on a EuRoC ASL folder (real or generated) with
 // the paper's two-stage update against the cloud's voxel map over Fast DDS (or plain VIO
-// with --no-map), writing a TUM trajectory of the IMU pose in the map frame at each image.
+// with --no-map), writing a TUM trajectory of the IMU pose at each image: in the map frame
+// once the cloud's localisation service has placed the filter (the poses before it are
+// mapped by the same answer), in the filter's own gravity-aligned odometry frame when it
+// never did (and with --no-map). Ground truth is read only by the ablations that ask for it
+// (estimator.alignment.source gt / gt_noisy, --query-pose-source gt).
 //
 //   edge_client --dataset DIR --config config/euroc.yaml --output TRAJ.txt
 //       [--dds-profile config/dds/loopback.xml] [--no-map] [--fixed-resolution 0.02]
@@ -9,6 +13,7 @@
 //
 // stdout: "KEY: value" lines (frames, timing columns a-e, link figures); logs and progress
 // on stderr. Exit codes: 0 success, 1 data error (named), 2 usage or configuration error.
+#include <algorithm>
 #include <chrono>
 #include <string>
 #include <vector>
@@ -81,7 +86,8 @@ void add_options(CLI::App& app, Args& a) {
                  "known_landmark | msckf_nullspace (the reference code) | ray_depth | plane")
       ->check(CLI::IsMember({"known_landmark", "msckf_nullspace", "ray_depth", "plane"}));
   app.add_option("--groundtruth", a.groundtruth,
-                 "Ground truth for the one-time alignment (TUM or EuRoC csv; default: the dataset's own)")
+                 "Ground truth for the ablations that read it (alignment.source gt / gt_noisy, --query-pose-source "
+                 "gt; TUM or EuRoC csv; default: the dataset's own)")
       ->check(CLI::ExistingFile);
   app.add_option("--set", a.overrides, "Override one option, e.g. --set estimator.msckf.sigma_px=1.5");
   app.add_option("--frames", a.frames, "Stereo frames to process (0 = all)")->check(CLI::NonNegativeNumber);
@@ -130,15 +136,37 @@ mrvs::StatusOr<Inputs> load_inputs(const Args& a, bool* usage) {
     MRVS_ASSIGN_OR_RETURN(rig.imu, mrvs::config::load_kalibr_imu(calib.imu));
     dataset_options.calibration = rig;
   }
+  const auto& est = in.options.estimator;
+  const bool needs_gt = mrvs::edge::needs_groundtruth(est.alignment) || est.map.query_pose_source == "gt";
+  dataset_options.read_groundtruth = needs_gt && a.groundtruth.empty();
   MRVS_ASSIGN_OR_RETURN(in.dataset, mrvs::io::open_euroc_dataset(dataset_options));
   for (const std::string& w : in.dataset->warnings()) spdlog::warn("{}", w);
+  if (!needs_gt) {
+    if (!a.groundtruth.empty()) spdlog::warn("--groundtruth ignored: no ablation that reads ground truth is on");
+    return in;
+  }
   if (!a.groundtruth.empty()) {
     MRVS_ASSIGN_OR_RETURN(in.groundtruth, mrvs::io::read_trajectory(a.groundtruth));
   } else if (in.dataset->has_groundtruth()) {
     in.groundtruth = mrvs::io::to_trajectory(in.dataset->groundtruth());
+  } else {
+    return absl::FailedPreconditionError(fmt::format(
+        "the ablation alignment.source '{}' / query_pose_source '{}' reads ground truth, and {} has no "
+        "state_groundtruth_estimate0: pass --groundtruth FILE, or use estimator.alignment.source map (the default)",
+        est.alignment.source, est.map.query_pose_source, a.dataset));
   }
+  spdlog::info("ground truth read for the ablation (alignment.source {}, query_pose_source {})",
+               est.alignment.source, est.map.query_pose_source);
   return in;
 }
+
+/// Localisation figures over the run (alignment.source map).
+struct LocalisationReport {
+  int requests = 0, replies = 0, timeouts = 0, accepted = 0;
+  std::vector<double> bytes_up, bytes_down, rtt_ms, cloud_ms, points;
+  double first_after_s = -1.0;          ///< sensor time from initialisation to the first acceptance
+  mrvs::TimestampNs first_t_imu_ns = 0;  ///< IMU time of the pose at that frame
+};
 
 struct Report {
   std::vector<double> image_ms, tracking_ms, update_ms, select_ms, ray_ms, total_ms;
@@ -146,7 +174,13 @@ struct Report {
   int frames = 0, skipped = 0, initialized_at = -1, points_max = 0, frames_without_map = 0, requests = 0,
       timeouts = 0;
   double frame_interval_ms = 0.0;  ///< median image interval of the dataset (the frame's real-time budget)
-  mrvs::io::Trajectory trajectory;
+  mrvs::io::Trajectory trajectory;  ///< map frame
+  mrvs::io::Trajectory odometry;    ///< every pose in its filter run's odometry frame, until mapped
+  mrvs::io::Trajectory unmapped;    ///< poses of the current run not yet in the map frame
+  int run = 0;
+  mrvs::TimestampNs run_start_ns = 0;
+  int poses_never_mapped = 0;  ///< of runs that ended (restart) before the cloud placed them
+  LocalisationReport loc;
 };
 
 void print_ms(const char* key, const std::vector<double>& v) {
@@ -161,7 +195,7 @@ double mean(const std::vector<double>& v) {
 
 void print_report(const Report& r, double wall_s) {
   fmt::print("FRAMES: {}\nFRAMES_SKIPPED: {}\nINITIALIZED_AT_FRAME: {}\nPOSES: {}\n", r.frames, r.skipped,
-             r.initialized_at, r.trajectory.size());
+             r.initialized_at, r.trajectory.empty() ? r.odometry.size() : r.trajectory.size());
   fmt::print("FRAME_INTERVAL_MS: {:.3f}\n", r.frame_interval_ms);
   fmt::print("WALL_S: {:.2f}\nRATE_FPS: {:.1f}\nPOINTS_IN_STATE_MAX: {}\n", wall_s,
              r.frames / std::max(wall_s, 1e-9), r.points_max);
@@ -186,6 +220,15 @@ void print_report(const Report& r, double wall_s) {
         return m;
       }());
   print_ms("RTT", r.rtt_ms);
+  const LocalisationReport& L = r.loc;
+  fmt::print("LOCALISATION_REQUESTS: {}\nLOCALISATION_REPLIES: {}\nLOCALISATION_TIMEOUTS: {}\nLOCALISED: {}\n",
+             L.requests, L.replies, L.timeouts, L.accepted);
+  fmt::print("LOCALISED_AFTER_S: {:.3f}\nLOCALISED_AT_T_NS: {}\n", L.first_after_s, L.first_t_imu_ns);
+  fmt::print("LOCALISATION_SUBMAP_POINTS: {:.0f}\nLOCALISATION_REQUEST_BYTES: {:.0f}\nLOCALISATION_REPLY_BYTES: {:.0f}\n",
+             mean(L.points), mean(L.bytes_up), mean(L.bytes_down));
+  print_ms("LOCALISATION_RTT", L.rtt_ms);
+  print_ms("LOCALISATION_CLOUD", L.cloud_ms);
+  fmt::print("POSES_NEVER_IN_MAP_FRAME: {}\n", r.poses_never_mapped + static_cast<int>(r.unmapped.size()));
 }
 
 /// Feeds the IMU samples up to the first one at or after t_ns (IMU clock).
@@ -196,6 +239,49 @@ mrvs::Status feed_imu_until(mrvs::edge::VioSystem& vio, const std::vector<mrvs::
     if (imu[(*next)++].t_ns >= t_ns) break;
   }
   return absl::OkStatus();
+}
+
+/// A pose into the map-frame trajectory, or (odometry frame) held until the cloud places its run.
+void add_pose(const mrvs::edge::FrameOutput& e, Report* r) {
+  if (e.run != r->run) {  // a new filter run (restart): a new odometry frame
+    r->poses_never_mapped += static_cast<int>(r->unmapped.size());
+    r->unmapped.clear();
+    r->run = e.run;
+    r->run_start_ns = e.t_ns;
+  }
+  const mrvs::io::StampedPose pose{e.t_imu_ns, *e.T_w_b};
+  if (e.T_m_o) {  // placed this frame: the run's earlier poses follow
+    for (const mrvs::io::StampedPose& p : r->unmapped) r->trajectory.push_back({p.t_ns, *e.T_m_o * p.T_w_b});
+    r->unmapped.clear();
+  }
+  if (e.in_map_frame) {
+    r->trajectory.push_back(pose);
+  } else {
+    r->unmapped.push_back(pose);
+    r->odometry.push_back(pose);
+  }
+}
+
+void account_localisation(const mrvs::edge::FrameOutput& e, Report* r) {
+  const mrvs::edge::LocalisationFrameStats& l = e.localisation;
+  LocalisationReport& L = r->loc;
+  L.requests += l.requests;
+  L.replies += l.replies;
+  L.timeouts += l.timeouts;
+  if (l.requests > 0) {
+    L.bytes_up.push_back(static_cast<double>(l.bytes_up));
+    L.points.push_back(l.submap_points);
+  }
+  if (l.replies > 0) {
+    L.bytes_down.push_back(static_cast<double>(l.bytes_down));
+    L.rtt_ms.push_back(l.rtt_ms);
+    L.cloud_ms.push_back(l.cloud_ms);
+  }
+  if (!e.T_m_o) return;
+  if (++L.accepted == 1) {
+    L.first_after_s = mrvs::to_seconds(e.t_ns - r->run_start_ns);
+    L.first_t_imu_ns = e.t_imu_ns;
+  }
 }
 
 void account(const mrvs::edge::StereoOutput& out, int k, bool use_map, Report* r) {
@@ -210,7 +296,8 @@ void account(const mrvs::edge::StereoOutput& out, int k, bool use_map, Report* r
   r->total_ms.push_back(out.tracked.timing.image_ms + out.tracked.timing.tracking_ms + e.timing.total_ms);
   r->points_max = std::max(r->points_max, e.slam_points);
   if (e.initialized && r->initialized_at < 0) r->initialized_at = k;
-  if (e.T_w_b) r->trajectory.push_back({e.t_imu_ns, *e.T_w_b});
+  if (e.T_w_b) add_pose(e, r);
+  account_localisation(e, r);
   if (!use_map || !e.initialized) return;
   r->requests += m.requests;
   r->timeouts += m.timeouts;
@@ -250,14 +337,16 @@ mrvs::StatusOr<std::unique_ptr<mrvs::edge::DdsMapService>> connect(const Args& a
   return service;
 }
 
-void log_progress(const mrvs::edge::StereoOutput& out, std::size_t k, std::size_t n, double elapsed_s) {
+void log_progress(const mrvs::edge::StereoOutput& out, const mrvs::edge::VioEstimator& vio, std::size_t k,
+                  std::size_t n, double elapsed_s) {
   const auto& e = out.estimate;
+  const std::string map =
+      e.in_map_frame ? fmt::format("map: {} rays, {} accepted{}", e.map.stage1_rays + e.map.registration_rays,
+                                   e.map.stage1_accepted, e.map.timeouts > 0 ? " (cloud not answering)" : "")
+                     : fmt::format("odometry frame (plain VIO): {}", vio.localisation_status());
   spdlog::info("frame {}/{} ({:.1f} fps), {}", k + 1, n, (k + 1) / elapsed_s,
-               e.initialized
-                   ? fmt::format("tracking: {} clones, {} points, map: {} rays, {} accepted{}", e.clones,
-                                 e.slam_points, e.map.stage1_rays + e.map.registration_rays,
-                                 e.map.stage1_accepted, e.map.timeouts > 0 ? " (cloud not answering)" : "")
-                   : e.status);
+               e.initialized ? fmt::format("tracking: {} clones, {} points, {}", e.clones, e.slam_points, map)
+                             : e.status);
 }
 
 /// Runs every frame; false on a data error (printed).
@@ -300,7 +389,7 @@ bool process(const Args& a, const mrvs::io::DatasetReader& reader, mrvs::edge::V
     const auto now = std::chrono::steady_clock::now();
     if (a.progress_s > 0 && std::chrono::duration<double>(now - last_progress).count() >= a.progress_s) {
       last_progress = now;
-      log_progress(*out, k, n, std::chrono::duration<double>(now - t0).count());
+      log_progress(*out, vio.estimator(), k, n, std::chrono::duration<double>(now - t0).count());
     }
   }
   return true;
@@ -328,12 +417,20 @@ int run(const Args& a) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!process(a, *in->dataset, *vio, use_map, &report)) return mrvs::kExitDataError;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (auto s = mrvs::io::write_tum_trajectory(a.output, report.trajectory); !s.ok()) {
+  const bool mapped = !report.trajectory.empty();
+  mrvs::io::Trajectory& out = mapped ? report.trajectory : report.odometry;
+  std::stable_sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.t_ns < y.t_ns; });
+  if (!mapped && vio->estimator().options().alignment.source == "map" && use_map && !out.empty()) {
+    spdlog::warn("the cloud never placed the filter in its map ({}): the trajectory is in the odometry frame",
+                 vio->estimator().localisation_status());
+  }
+  if (auto s = mrvs::io::write_tum_trajectory(a.output, out); !s.ok()) {
     fmt::print(stderr, "edge_client: error: {}\n", std::string(s.message()));
     return mrvs::kExitDataError;
   }
   print_report(report, wall);
-  if (report.trajectory.empty()) {
+  fmt::print("TRAJECTORY_FRAME: {}\n", mapped ? "map" : "odometry");
+  if (out.empty()) {
     fmt::print(stderr, "edge_client: error: never initialised ({})\n", vio->estimator().waiting_reason());
     return mrvs::kExitDataError;
   }

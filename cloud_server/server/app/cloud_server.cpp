@@ -4,6 +4,9 @@
 //
 //   cloud_server --map build/demo/V1_01_sim.mrvm --dds-profile config/dds/loopback.xml
 //                [--config config/map_indoor.yaml] [--set query.search_range_m=1.0]
+//                [--no-localisation]
+// With the map it serves ray queries and (unless --no-localisation) the localisation service
+// (design/localisation.md), tuned by the config's `localise` section.
 #include <pthread.h>
 #include <signal.h>
 
@@ -19,6 +22,7 @@
 #include "mrvs/config/options.h"
 #include "mrvs/core/cli.h"
 #include "mrvs/core/log.h"
+#include "mrvs/localise/localiser.h"
 #include "mrvs/map/map_file.h"
 
 namespace {
@@ -31,6 +35,7 @@ struct Args {
   std::string dds_profile;
   double stats_period_s = 10.0;
   std::uint64_t max_requests = 0;
+  bool no_localisation = false;
   std::string log_level = "info";
 };
 
@@ -51,7 +56,9 @@ void add_options(CLI::App& app, Args& a) {
   app.add_option("--config", a.config,
                  "YAML file whose 'query' section tunes the query engine (config/map_*.yaml)")
       ->check(CLI::ExistingFile);
-  app.add_option("--set", a.overrides, "Override a query option, e.g. --set query.search_range_m=1.0");
+  app.add_option("--set", a.overrides,
+                 "Override a query or localise option, e.g. --set query.search_range_m=1.0");
+  app.add_flag("--no-localisation", a.no_localisation, "Serve ray queries only (no localisation service)");
   app.add_option("--stats-period", a.stats_period_s,
                  "Seconds between per-client counter logs (0 = only at exit)")
       ->capture_default_str()
@@ -62,14 +69,37 @@ void add_options(CLI::App& app, Args& a) {
   mrvs::add_log_level_option(app, a.log_level);
 }
 
-mrvs::StatusOr<mrvs::map::QueryOptions> load_query_options(const Args& a) {
+struct ServerOptions {
+  mrvs::map::QueryOptions query;
+  mrvs::localise::LocaliserOptions localise;
+};
+
+mrvs::StatusOr<ServerOptions> load_server_options(const Args& a) {
   MRVS_ASSIGN_OR_RETURN(const mrvs::config::YamlDocument doc,
                         mrvs::config::load_yaml_with_overrides(a.config, a.overrides));
-  return mrvs::config::load_options<mrvs::map::QueryOptions>(doc, "query");
+  ServerOptions o;
+  MRVS_ASSIGN_OR_RETURN(o.query, mrvs::config::load_options<mrvs::map::QueryOptions>(doc, "query"));
+  MRVS_ASSIGN_OR_RETURN(o.localise, mrvs::config::load_options<mrvs::localise::LocaliserOptions>(doc, "localise"));
+  return o;
+}
+
+/// The localiser over `map`, or nullptr with --no-localisation.
+mrvs::StatusOr<std::shared_ptr<const mrvs::localise::Localiser>> make_localiser(
+    const Args& a, std::shared_ptr<const mrvs::map::VoxelMap> map, const mrvs::localise::LocaliserOptions& o) {
+  if (a.no_localisation) {
+    spdlog::info("localisation service off (--no-localisation)");
+    return std::shared_ptr<const mrvs::localise::Localiser>();
+  }
+  spdlog::info("localise options:\n{}", mrvs::config::options_to_yaml(o, "localise"));
+  MRVS_ASSIGN_OR_RETURN(mrvs::localise::Localiser localiser, mrvs::localise::Localiser::create(std::move(map), o));
+  spdlog::info("localisation service ready ({:.1f} s to index the {} m level)", localiser.setup_s(),
+               o.fine_resolution_m);
+  return std::make_shared<const mrvs::localise::Localiser>(std::move(localiser));
 }
 
 mrvs::StatusOr<std::unique_ptr<mrvs::cloud::RayServer>> make_server(const Args& a) {
-  MRVS_ASSIGN_OR_RETURN(const mrvs::map::QueryOptions query, load_query_options(a));
+  MRVS_ASSIGN_OR_RETURN(const ServerOptions server_options, load_server_options(a));
+  const mrvs::map::QueryOptions& query = server_options.query;
   spdlog::info("query options:\n{}", mrvs::config::options_to_yaml(query, "query"));
   MRVS_ASSIGN_OR_RETURN(mrvs::map::VoxelMap map, mrvs::map::load_voxel_map(a.map));
   MRVS_ASSIGN_OR_RETURN(const std::string bytes, mrvs::map::serialize_voxel_map(map, a.map));
@@ -84,9 +114,9 @@ mrvs::StatusOr<std::unique_ptr<mrvs::cloud::RayServer>> make_server(const Args& 
   for (std::size_t i = 0; i < map.levels.size(); ++i) {
     spdlog::info("level {}: {} m, {} points", i, map.levels[i].resolution, map.levels[i].points.size());
   }
-  MRVS_ASSIGN_OR_RETURN(
-      mrvs::map::QueryEngine engine,
-      mrvs::map::QueryEngine::create(std::make_shared<const mrvs::map::VoxelMap>(std::move(map)), query));
+  const auto shared = std::make_shared<const mrvs::map::VoxelMap>(std::move(map));
+  MRVS_ASSIGN_OR_RETURN(options.localiser, make_localiser(a, shared, server_options.localise));
+  MRVS_ASSIGN_OR_RETURN(mrvs::map::QueryEngine engine, mrvs::map::QueryEngine::create(shared, query));
   return mrvs::cloud::RayServer::create(std::move(engine), options);
 }
 

@@ -53,6 +53,10 @@ StatusOr<std::unique_ptr<RayServer>> RayServer::create(map::QueryEngine engine,
   MRVS_ASSIGN_OR_RETURN(d.requests, d.participant->reader(topics.requests, link::kReaderProfile));
   MRVS_ASSIGN_OR_RETURN(d.replies, d.participant->writer(topics.replies, link::kWriterProfile));
   MRVS_ASSIGN_OR_RETURN(d.map_info, d.participant->writer(topics.map_info, link::kMapInfoWriterProfile));
+  if (options.localiser) {
+    MRVS_ASSIGN_OR_RETURN(server->localisation_, LocalisationServer::create(*d.participant, options.localiser,
+                                                                            topics, options.localisation));
+  }
   MRVS_RETURN_IF_ERROR(server->publish_map_info());
   return server;
 }
@@ -64,6 +68,7 @@ Status RayServer::publish_map_info() {
   info.checksum = options_.map_checksum;
   info.resolutions = resolutions_;
   info.max_rays_per_batch = static_cast<std::uint32_t>(engine_.options().max_rays_per_batch);
+  info.localisation_protocol_version = localisation_ ? wire::LOCALISATION_PROTOCOL_VERSION : 0;
   wire::MapInfo sample = link::encode_map_info(info);
   if (dds_->map_info->write(&sample) != true) return absl::InternalError("cannot publish the map info");
   return absl::OkStatus();
@@ -103,6 +108,7 @@ void RayServer::handle(const wire::RayQueryBatch& request) {
 }
 
 Status RayServer::run() {
+  if (localisation_) localisation_->start();
   dds::WaitSet waitset;
   dds_->requests->get_statuscondition().set_enabled_statuses(dds::StatusMask::data_available());
   waitset.attach_condition(dds_->requests->get_statuscondition());
@@ -125,6 +131,7 @@ Status RayServer::run() {
       last_stats = steady_now_ns();
     }
   }
+  if (localisation_) localisation_->stop();
   log_counters();
   return absl::OkStatus();
 }
@@ -141,6 +148,11 @@ void RayServer::log_counters() const {
     spdlog::info("client {}: {} requests ({} refused), {} rays, {} hits ({:.1f} %), last frame {}", id,
                  c.requests, c.rejected_requests, c.rays, c.hits, c.rays > 0 ? 100.0 * c.hits / c.rays : 0.0,
                  c.last_frame_seq);
+  }
+  if (!localisation_) return;
+  for (const auto& [id, c] : localisation_->counters()) {
+    spdlog::info("client {}: {} localisation requests ({} answered ok), {} B in, {} B out, last {:.0f} ms", id,
+                 c.requests, c.answered_ok, c.bytes_in, c.bytes_out, c.last_time_ms);
   }
 }
 

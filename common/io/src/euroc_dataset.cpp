@@ -164,7 +164,8 @@ class EurocDataset final : public DatasetReader {
   Status open(const DatasetOptions& options);
 
  private:
-  Status read_streams(const std::filesystem::path& mav0, const ReadPolicy& policy, bool check_files);
+  Status read_streams(const std::filesystem::path& mav0, const ReadPolicy& policy, bool check_files,
+                      bool read_groundtruth);
   Status load_calibration(const std::filesystem::path& mav0, const DatasetOptions& options);
   Status pair_stereo(DurationNs tolerance_ns);
   void summarize(const std::filesystem::path& mav0);
@@ -181,7 +182,7 @@ class EurocDataset final : public DatasetReader {
 
 Status EurocDataset::open(const DatasetOptions& options) {
   MRVS_ASSIGN_OR_RETURN(const std::filesystem::path mav0, find_mav0(options.path));
-  MRVS_RETURN_IF_ERROR(read_streams(mav0, options.policy, options.check_image_files));
+  MRVS_RETURN_IF_ERROR(read_streams(mav0, options.policy, options.check_image_files, options.read_groundtruth));
   MRVS_RETURN_IF_ERROR(load_calibration(mav0, options));
   MRVS_RETURN_IF_ERROR(pair_stereo(options.stereo_tolerance_ns));
   summarize(mav0);
@@ -189,8 +190,8 @@ Status EurocDataset::open(const DatasetOptions& options) {
   return absl::OkStatus();
 }
 
-Status EurocDataset::read_streams(const std::filesystem::path& mav0, const ReadPolicy& policy,
-                                  bool check_files) {
+Status EurocDataset::read_streams(const std::filesystem::path& mav0, const ReadPolicy& policy, bool check_files,
+                                  bool read_groundtruth) {
   for (std::size_t cam = 0; cam < 2; ++cam) {
     const std::filesystem::path folder = mav0 / fmt::format("cam{}", cam);
     MRVS_RETURN_IF_ERROR(require_file(folder / "data.csv", "image list"));
@@ -200,6 +201,7 @@ Status EurocDataset::read_streams(const std::filesystem::path& mav0, const ReadP
   MRVS_RETURN_IF_ERROR(require_file(mav0 / "imu0" / "data.csv", "IMU data"));
   MRVS_ASSIGN_OR_RETURN(imu_, read_euroc_imu_csv(mav0 / "imu0" / "data.csv", policy, &warnings_));
   const std::filesystem::path gt_folder = mav0 / "state_groundtruth_estimate0";
+  if (!read_groundtruth) return absl::OkStatus();  // never opened: a run without ground truth
   if (is_file(gt_folder / "data.csv")) {
     MRVS_ASSIGN_OR_RETURN(groundtruth_, read_euroc_groundtruth(gt_folder / "data.csv", policy, &warnings_));
   } else if (is_dir(gt_folder)) {

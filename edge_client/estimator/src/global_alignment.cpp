@@ -48,7 +48,7 @@ StatusOr<SE3d> interpolate_trajectory(const io::Trajectory& traj, TimestampNs t_
 StatusOr<std::optional<SE3d>> alignment_target(const AlignmentOptions& o, const io::Trajectory& gt,
                                                const State& state) {
   const SE3d T_o_b(state.imu.q_w_b, state.imu.p_w_b);
-  if (o.source == "none") return std::optional<SE3d>();
+  if (o.source == "none" || o.source == "map") return std::optional<SE3d>();
   if (o.source == "constant") return std::optional<SE3d>(constant_pose(o.constant) * T_o_b);
   if (gt.empty()) {
     return absl::FailedPreconditionError(
@@ -65,8 +65,7 @@ Status align_state(State& state, const SE3d& T_w_b, double position_sigma, std::
   if (!state.clones.empty()) return absl::FailedPreconditionError("align_state: only before the first clone");
   // The rotation about gravity (z) that best takes the estimated orientation to the target
   // one (2-D Procrustes on the horizontal block).
-  const Mat3d R_full = T_w_b.rotation_matrix() * state.imu.q_w_b.toRotationMatrix().transpose();
-  const double yaw = std::atan2(R_full(1, 0) - R_full(0, 1), R_full(0, 0) + R_full(1, 1));
+  const double yaw = yaw_of(SE3d(T_w_b.quaternion() * state.imu.q_w_b.conjugate(), Vec3d::Zero()));
   const Mat3d R = Eigen::AngleAxisd(yaw, Vec3d::UnitZ()).toRotationMatrix();  // R_w_o
   state.imu.q_w_b = Quatd(R * state.imu.q_w_b.toRotationMatrix()).normalized();
   state.imu.p_w_b = T_w_b.translation();
@@ -89,6 +88,87 @@ Status align_state(State& state, const SE3d& T_w_b, double position_sigma, std::
   K.block<3, 3>(0, 0) -= u * u.transpose();
   state.P = K * state.P * K.transpose();
   state.P.block<3, 3>(0, 0) += *yaw_sigma * *yaw_sigma * u * u.transpose();
+  return absl::OkStatus();
+}
+
+double yaw_of(const SE3d& T) {
+  const Mat3d R = T.rotation_matrix();
+  return std::atan2(R(1, 0) - R(0, 1), R(0, 0) + R(1, 1));
+}
+
+SE3d yaw_only(const SE3d& T) { return SE3d(Quatd(Eigen::AngleAxisd(yaw_of(T), Vec3d::UnitZ())), T.translation()); }
+
+Eigen::MatrixXd gauge_directions(const State& state, const Vec3d& pivot) {
+  const Vec3d z = Vec3d::UnitZ();
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(state.dim(), 4);
+  auto pose = [&](int o, const Quatd& q_w_b, const Vec3d& p_w) {  // [dtheta (body); dp] at offset o
+    N.block<3, 3>(o + 3, 0).setIdentity();
+    N.block<3, 1>(o, 3) = q_w_b.conjugate() * z;
+    N.block<3, 1>(o + 3, 3) = z.cross(p_w - pivot);
+  };
+  const int i = state.imu_slot.offset;
+  pose(i, state.imu.q_w_b, state.imu.p_w_b);
+  N.block<3, 1>(i + 6, 3) = z.cross(state.imu.v_w_b);
+  for (const auto& [t, c] : state.clones) pose(c.slot.offset, c.T_w_b.quaternion(), c.T_w_b.translation());
+  for (const auto& [id, p] : state.points) {
+    N.block<3, 3>(p.slot.offset, 0).setIdentity();
+    N.block<3, 1>(p.slot.offset, 3) = z.cross(p.p_w - pivot);
+  }
+  return N;
+}
+
+namespace {
+
+/// Rows extracting the current IMU's position and heading errors (4 x dim): C N = I for the
+/// gauge directions through the IMU position.
+Eigen::MatrixXd imu_gauge_rows(const State& state) {
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(4, state.dim());
+  const int i = state.imu_slot.offset;
+  C.block<3, 3>(0, i + 3).setIdentity();
+  C.block<1, 3>(3, i) = (state.imu.q_w_b.conjugate() * Vec3d::UnitZ()).transpose();  // z^T R_w_b dtheta
+  return C;
+}
+
+}  // namespace
+
+Status reanchor_state(State& state, const SE3d& T_m_o_in, const Mat6d& covariance, const Vec3d& anchor_m) {
+  if (!covariance.allFinite() || !covariance.isApprox(covariance.transpose(), 1e-9)) {
+    return absl::InvalidArgumentError("reanchor_state: the alignment covariance is not finite and symmetric");
+  }
+  const SE3d T = yaw_only(T_m_o_in);
+  const Mat3d R = T.rotation_matrix();
+  // Error-state Jacobian of the frame change: world-frame blocks rotate, body-frame ones stay.
+  Eigen::MatrixXd F = Eigen::MatrixXd::Identity(state.dim(), state.dim());
+  const int i = state.imu_slot.offset;
+  F.block<3, 3>(i + 3, i + 3) = R;
+  F.block<3, 3>(i + 6, i + 6) = R;
+  state.imu.q_w_b = (T.quaternion() * state.imu.q_w_b).normalized();
+  state.imu.p_w_b = T * state.imu.p_w_b;
+  state.imu.v_w_b = R * state.imu.v_w_b;
+  for (auto& [t, c] : state.clones) {
+    F.block<3, 3>(c.slot.offset + 3, c.slot.offset + 3) = R;
+    c.T_w_b = T * c.T_w_b;
+    c.fej = T * c.fej;
+  }
+  for (auto& [id, p] : state.points) {
+    F.block<3, 3>(p.slot.offset, p.slot.offset) = R;
+    p.p_w = T * p.p_w;
+    p.fej = T * p.fej;
+  }
+  // Drop the position and heading uncertainty (along the gauge directions), put the map's in.
+  const Vec3d pivot = state.imu.p_w_b;
+  const Eigen::MatrixXd N = gauge_directions(state, pivot);
+  const Eigen::MatrixXd K = Eigen::MatrixXd::Identity(state.dim(), state.dim()) - N * imu_gauge_rows(state);
+  Eigen::Matrix4d G = Eigen::Matrix4d::Identity();  // [rho; phi_z] about the anchor -> IMU [p; yaw]
+  G.block<3, 1>(0, 3) = Vec3d::UnitZ().cross(pivot - anchor_m);
+  Eigen::Matrix4d S;
+  const int idx[4] = {0, 1, 2, 5};
+  for (int a = 0; a < 4; ++a) {
+    for (int b = 0; b < 4; ++b) S(a, b) = covariance(idx[a], idx[b]);
+  }
+  const Eigen::MatrixXd KF = K * F;
+  state.P = KF * state.P * KF.transpose() + N * (G * S * G.transpose()) * N.transpose();
+  state.P = 0.5 * (state.P + state.P.transpose()).eval();
   return absl::OkStatus();
 }
 

@@ -13,8 +13,8 @@ MsckfUpdater::MsckfUpdater(const MsckfOptions& options, const TriangulationOptio
     : options_(options), triangulation_(triangulation), chi2_(500) {}
 
 std::optional<Measurement> MsckfUpdater::feature_measurement(const State& state, const FeatureTrack& track,
-                                                             MsckfStats* stats,
-                                                             const MapPoint* on_plane) const {
+                                                             MsckfStats* stats, const MapPoint* on_plane,
+                                                             Vec3d* position) const {
   const std::vector<BearingObservation> bearings = clone_bearings(state, track);
   if (static_cast<int>(bearings.size()) < options_.min_observations) {
     ++stats->too_few_observations;
@@ -41,6 +41,7 @@ std::optional<Measurement> MsckfUpdater::feature_measurement(const State& state,
     ++stats->gated;
     return std::nullopt;
   }
+  if (position) *position = *p_w;
   return std::move(m);
 }
 
@@ -119,7 +120,8 @@ std::optional<Measurement> MsckfUpdater::map_measurement(const State& state, con
 }
 
 MsckfStats MsckfUpdater::update(State& state, const FeatureDatabase& db, const std::vector<FeatureId>& ids,
-                                const std::map<FeatureId, MapPoint>& map_points, Stage1Mode mode) const {
+                                const std::map<FeatureId, MapPoint>& map_points, Stage1Mode mode,
+                                std::vector<std::pair<FeatureId, Vec3d>>* triangulated) const {
   MsckfStats stats;
   // The most observed features first, at most max_features.
   std::vector<const FeatureTrack*> tracks;
@@ -135,9 +137,11 @@ MsckfStats MsckfUpdater::update(State& state, const FeatureDatabase& db, const s
   std::vector<Measurement> parts;
   for (const FeatureTrack* t : tracks) {
     const auto mp = map_points.find(t->id);
+    Vec3d p_w = Vec3d::Zero();
     std::optional<Measurement> m = mp == map_points.end()
-                                       ? feature_measurement(state, *t, &stats)
+                                       ? feature_measurement(state, *t, &stats, nullptr, &p_w)
                                        : map_measurement(state, *t, mp->second, mode, &stats);
+    if (m && triangulated && mp == map_points.end()) triangulated->emplace_back(t->id, p_w);
     if (!m) continue;
     if (mp != map_points.end()) ++stats.with_map;
     stats.rows += m->rows();

@@ -36,6 +36,7 @@ VioEstimator::VioEstimator(const EstimatorOptions& options, const config::Stereo
       stage1_mode_(parse_stage1_mode(options.map.stage1_mode).value_or(Stage1Mode::kKnownLandmark)),
       points_(options.points, options.triangulation),
       map_stage_(options.map, options.triangulation),
+      localiser_(options.localisation),
       registered_(options.map.registered_voxel_m, options.map.registered_per_voxel),
       surfaces_(options.map.plane_radius_m, kSurfacePointsPerCell) {}
 
@@ -104,6 +105,8 @@ StatusOr<FrameOutput> VioEstimator::initialize(const FeatureFrame& frame) {
   if (!init) return out;
   MRVS_RETURN_IF_ERROR(start(*init, frame));
   out.initialized = true;
+  out.run = run_;
+  out.in_map_frame = in_map_frame_;
   out.T_w_b = SE3d(state_->imu.q_w_b, state_->imu.p_w_b);
   out.t_imu_ns = state_->imu.t_ns;
   out.clones = 1;
@@ -128,6 +131,10 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
             : std::optional<double>(gt ? 1e-3 : std::max(1e-3, a.rotation_noise_deg * M_PI / 180.0));
     MRVS_RETURN_IF_ERROR(align_state(state, *target, sigma, yaw_sigma));
   }
+  // Source map: the odometry frame until the cloud places the filter; none: the odometry
+  // frame is taken as the map frame (the user's choice).
+  in_map_frame_ = options_.alignment.source != "map";
+  localiser_.reset();
   // The body rate at the start (for the clone's time-offset Jacobian).
   const auto rates = propagate(state.imu, imu_vector(), state.imu.t_ns, g_w_, noise_);
   last_w_b_ = rates.ok() ? rates->last_rates.w : Vec3d::Zero();
@@ -138,8 +145,11 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
   registered_ = RegisteredMap(options_.map.registered_voxel_m, options_.map.registered_per_voxel);
   db_.add(frame);
   init_ns_ = frame.t_ns;
-  init_summary_ = fmt::format("initialised ({}) at {} ns: {}; alignment {}", init.method, frame.t_ns,
-                              init.detail, options_.alignment.source);
+  ++run_;
+  init_summary_ = fmt::format("initialised ({}) at {} ns: {}; alignment {}{}", init.method, frame.t_ns,
+                              init.detail, options_.alignment.source,
+                              localises() ? " (plain VIO in the odometry frame until the cloud places it in the map)"
+                                          : "");
   waiting_.clear();
   return absl::OkStatus();
 }
@@ -158,6 +168,8 @@ std::optional<std::string> VioEstimator::imu_gap(TimestampNs from_ns, TimestampN
 
 void VioEstimator::restart() {
   state_.reset();
+  in_map_frame_ = false;
+  localiser_.reset();
   db_ = FeatureDatabase();
   registered_ = RegisteredMap(options_.map.registered_voxel_m, options_.map.registered_per_voxel);
   initializer_ = Initializer(options_.initializer, rig_, noise_, options_.propagator.gravity_mps2);
@@ -169,6 +181,7 @@ StatusOr<FrameOutput> VioEstimator::track(const FeatureFrame& frame) {
   FrameOutput out;
   out.t_ns = frame.t_ns;
   out.initialized = true;
+  out.run = run_;
   const Clock::time_point t0 = Clock::now();
   deadline_ = t0 + std::chrono::microseconds(static_cast<std::int64_t>(options_.map.frame_budget_ms * 1e3));
   const TimestampNs t_imu = frame.t_ns + from_seconds(state_->time_offset_s);
@@ -195,7 +208,10 @@ StatusOr<FrameOutput> VioEstimator::track(const FeatureFrame& frame) {
   MRVS_RETURN_IF_ERROR(augment_clone(*state_, frame.t_ns, last_w_b_));
   db_.add(frame);
   out.timing.propagate_ms = ms_since(t0);
-  update(frame, &out);
+  std::vector<std::pair<FeatureId, Vec3d>> triangulated;
+  update(frame, &out, localises() && !in_map_frame_ ? &triangulated : nullptr);
+  if (localises() && !in_map_frame_) localise(frame, triangulated, &out);
+  out.in_map_frame = in_map_frame_;
   out.T_w_b = SE3d(state_->imu.q_w_b, state_->imu.p_w_b);
   out.t_imu_ns = state_->imu.t_ns;
   out.clones = static_cast<int>(state_->clones.size());
@@ -209,12 +225,13 @@ StatusOr<FrameOutput> VioEstimator::track(const FeatureFrame& frame) {
   return out;
 }
 
-void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
+void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out,
+                          std::vector<std::pair<FeatureId, Vec3d>>* triangulated) {
   State& s = *state_;
   const bool full = static_cast<int>(s.clones.size()) > options_.state.max_clones;
   const TimestampNs marg_ns = full ? clone_to_marginalize(s, db_, options_.keyframe) : 0;
   const bool marg_oldest = full && marg_ns == s.clones.begin()->first;
-  const bool use_map = map_ != nullptr && options_.map.enabled;
+  const bool use_map = map_ != nullptr && options_.map.enabled && in_map_frame_;
   // Triangulated points in the state: without the map, with it when asked to, and as the
   // fallback while the cloud does not answer.
   const bool points_from_tracks = !use_map || options_.map.points_from_tracks || !map_answering_;
@@ -240,7 +257,7 @@ void VioEstimator::update(const FeatureFrame& frame, FrameOutput* out) {
     map_points =
         map_stage_.associate(s, db_, groundtruth_, &msckf_ids, *map_, deadline_, &out->map, surfaces());
   Clock::time_point t0 = Clock::now();
-  out->msckf = msckf_.update(s, db_, msckf_ids, map_points, stage1_mode_);
+  out->msckf = msckf_.update(s, db_, msckf_ids, map_points, stage1_mode_, triangulated);
   out->timing.msckf_ms = ms_since(t0);
   update_points(frame, point_ids, use_map, out);
   if (out->map.requests > 0) map_answering_ = out->map.answered > 0;
@@ -281,6 +298,48 @@ void VioEstimator::update_points(const FeatureFrame& frame, const std::vector<Fe
     if (p.from_map) registered_.move(id, p.p_w);
   }
   out->timing.points_ms = ms_since(t0) - out->map.selection_ms;
+}
+
+bool VioEstimator::localises() const {
+  return options_.alignment.source == "map" && options_.map.enabled && map_ != nullptr;
+}
+
+bool VioEstimator::wants_dense_submap(TimestampNs t_cam_ns) const {
+  return state_ && localises() && !in_map_frame_ && localiser_.wants_dense(t_cam_ns);
+}
+
+void VioEstimator::add_dense_submap(TimestampNs t_cam_ns, const std::vector<Eigen::Vector3f>& points_c0) {
+  if (!state_ || state_->clones.count(t_cam_ns) == 0) return;
+  const SE3d T_w_c = state_->T_w_c(t_cam_ns, 0);
+  std::vector<Vec3d> points_w;
+  points_w.reserve(points_c0.size());
+  for (const Eigen::Vector3f& p : points_c0) points_w.push_back(T_w_c * p.cast<double>());
+  localiser_.add_points(t_cam_ns, points_w);
+}
+
+void VioEstimator::localise(const FeatureFrame& frame,
+                            const std::vector<std::pair<FeatureId, Vec3d>>& triangulated, FrameOutput* out) {
+  State& s = *state_;
+  for (const auto& [id, p] : triangulated) localiser_.set_track_point(id, frame.t_ns, p);
+  for (const auto& [id, p] : s.points) localiser_.set_track_point(id, frame.t_ns, p.p_w);
+  const std::optional<Alignment> a =
+      localiser_.step(frame.t_ns, s.imu.p_w_b, prior_, *map_, &out->localisation);
+  if (!a) return;
+  if (const Status st = reanchor_state(s, a->T_m_o, a->covariance, a->anchor_m); !st.ok()) {
+    spdlog::warn("localisation answer not applied: {}", std::string(st.message()));
+    return;
+  }
+  // The linearisation point of the newest clone moves with the state.
+  const SE3d T = yaw_only(a->T_m_o);
+  imu_fej_.q_w_b = (T.quaternion() * imu_fej_.q_w_b).normalized();
+  imu_fej_.p_w_b = T * imu_fej_.p_w_b;
+  imu_fej_.v_w_b = T.rotation_matrix() * imu_fej_.v_w_b;
+  registered_ = RegisteredMap(options_.map.registered_voxel_m, options_.map.registered_per_voxel);
+  surfaces_ = SurfaceMap(options_.map.plane_radius_m, kSurfacePointsPerCell);
+  in_map_frame_ = true;
+  out->T_m_o = T;
+  spdlog::info("{} after {:.1f} s: the filter is in the map frame", localiser_.status(),
+               to_seconds(frame.t_ns - init_ns_));
 }
 
 void VioEstimator::marginalize(TimestampNs marg_ns, FrameOutput* out) {

@@ -12,7 +12,31 @@ StatusOr<std::unique_ptr<DdsMapService>> DdsMapService::create(const MapClientOp
 std::optional<MapDescription> DdsMapService::description() {
   const auto info = client_->map_info();
   if (!info) return std::nullopt;
-  return MapDescription{info->origin, info->resolutions, info->checksum};
+  return MapDescription{info->origin, info->resolutions, info->checksum, offers_localisation()};
+}
+
+bool DdsMapService::offers_localisation() {
+  const auto info = client_->map_info();
+  if (!info) return false;
+  const std::uint32_t v = info->localisation_protocol_version;
+  if (v != 0 && v != wire::LOCALISATION_PROTOCOL_VERSION && !warned_protocol_) {
+    spdlog::warn("the cloud speaks localisation protocol {}, this edge {}: no localisation (use matching builds)", v,
+                 wire::LOCALISATION_PROTOCOL_VERSION);
+    warned_protocol_ = true;
+  }
+  return v == wire::LOCALISATION_PROTOCOL_VERSION;
+}
+
+StatusOr<std::size_t> DdsMapService::send_localisation(const localisation::Request& request, float quantum_m) {
+  return client_->send_localisation(request, quantum_m);
+}
+
+std::vector<LocalisationReply> DdsMapService::poll_localisation() {
+  std::vector<LocalisationReply> out;
+  for (LocalisationAnswer& a : client_->take_localisation_replies()) {
+    out.push_back({a.seq, std::move(a.result), a.bytes, a.rtt_ns});
+  }
+  return out;
 }
 
 MapReply DdsMapService::query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns,

@@ -13,6 +13,7 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
 #include "mrvs/core/hash.h"
+#include "mrvs/link/localisation_codec.h"
 #include "mrvs_linkPubSubTypes.h"
 
 namespace mrvs::edge {
@@ -46,6 +47,8 @@ struct MapClient::Dds {
   dds::DataWriter* requests = nullptr;
   dds::DataReader* replies = nullptr;
   dds::DataReader* map_info = nullptr;
+  dds::DataWriter* localisation_requests = nullptr;
+  dds::DataReader* localisation_replies = nullptr;
 };
 
 MapClient::MapClient() : dds_(std::make_unique<Dds>()) {}
@@ -64,6 +67,10 @@ StatusOr<std::unique_ptr<MapClient>> MapClient::create(const MapClientOptions& o
   MRVS_ASSIGN_OR_RETURN(d.requests, d.participant->writer(topics.requests, link::kWriterProfile));
   MRVS_ASSIGN_OR_RETURN(d.replies, d.participant->reader(topics.replies, link::kReaderProfile));
   MRVS_ASSIGN_OR_RETURN(d.map_info, d.participant->reader(topics.map_info, link::kMapInfoReaderProfile));
+  MRVS_ASSIGN_OR_RETURN(d.localisation_requests,
+                        d.participant->writer(topics.localisation_requests, link::kWriterProfile));
+  MRVS_ASSIGN_OR_RETURN(d.localisation_replies,
+                        d.participant->reader(topics.localisation_replies, link::kReaderProfile));
   return c;
 }
 
@@ -178,6 +185,51 @@ QueryReply MapClient::query(const std::vector<voxel::RayQuery>& rays, TimestampN
   timed_out.frame_seq = seq;
   timed_out.rtt_ns = since(start);
   return timed_out;
+}
+
+StatusOr<std::size_t> MapClient::send_localisation(const localisation::Request& request, float quantum_m) {
+  std::size_t dropped = 0;
+  wire::LocalisationRequest w = link::encode_localisation_request(client_id_, request, quantum_m, &dropped);
+  if (dropped > 0) {
+    spdlog::warn("localisation request {}: {} of {} points left out (beyond {} m of the anchor or the {}-point bound)",
+                 request.seq, dropped, request.points.size(), 32767.0 * quantum_m, wire::MAX_SUBMAP_POINTS);
+  }
+  const std::size_t bytes = link::payload_bytes(w);
+  if (!dds_->localisation_requests->write(&w)) {
+    return absl::UnavailableError(fmt::format("localisation request {} could not be written", request.seq));
+  }
+  ++stats_.localisation_sent;
+  stats_.localisation_bytes_up += bytes;
+  localisation_sent_[request.seq] = Clock::now();
+  while (localisation_sent_.size() > 64) localisation_sent_.erase(localisation_sent_.begin());
+  return bytes;
+}
+
+std::vector<LocalisationAnswer> MapClient::take_localisation_replies() {
+  std::vector<LocalisationAnswer> out;
+  wire::LocalisationReply reply;
+  dds::SampleInfo info;
+  while (dds_->localisation_replies->take_next_sample(&reply, &info) == ReturnCode_t::RETCODE_OK) {
+    if (!info.valid_data || reply.client_id() != client_id_) continue;
+    const auto sent = localisation_sent_.find(reply.request_seq());
+    if (sent == localisation_sent_.end()) continue;  // a duplicate, or not ours
+    auto decoded = link::decode_localisation_reply(reply);
+    if (!decoded.ok()) {
+      ++stats_.corrupt_dropped;
+      spdlog::warn("localisation reply dropped: {}", std::string(decoded.status().message()));
+      continue;
+    }
+    LocalisationAnswer a;
+    a.seq = reply.request_seq();
+    a.result = std::move(*decoded);
+    a.bytes = link::payload_bytes(reply);
+    a.rtt_ns = since(sent->second);
+    localisation_sent_.erase(sent);
+    ++stats_.localisation_replies;
+    stats_.localisation_bytes_down += a.bytes;
+    out.push_back(std::move(a));
+  }
+  return out;
 }
 
 }  // namespace mrvs::edge

@@ -157,6 +157,7 @@ wire::MapInfo encode_map_info(const MapInfo& info) {
   w.protocol_version(wire::WIRE_PROTOCOL_VERSION);
   w.rays_per_batch_limit(info.max_rays_per_batch);
   for (double r : info.resolutions) w.resolutions().push_back(static_cast<float>(r));
+  w.localisation_version(info.localisation_protocol_version);
   return w;
 }
 
@@ -173,6 +174,7 @@ StatusOr<MapInfo> decode_map_info(const wire::MapInfo& w) {
   info.checksum = w.map_checksum();
   info.max_rays_per_batch = w.rays_per_batch_limit();
   info.protocol_version = w.protocol_version();
+  info.localisation_protocol_version = w.localisation_version();
   for (float r : w.resolutions()) info.resolutions.push_back(static_cast<double>(r));
   return info;
 }

@@ -191,6 +191,12 @@ StatusOr<LinkTopics> create_link_topics(Participant& participant,
       topics.replies, participant.topic(kReplyTopic, dds::TypeSupport(new wire::RayReplyBatchPubSubType())));
   MRVS_ASSIGN_OR_RETURN(topics.map_info,
                         participant.topic(kMapInfoTopic, dds::TypeSupport(new wire::MapInfoPubSubType())));
+  MRVS_ASSIGN_OR_RETURN(topics.localisation_requests,
+                        participant.topic(kLocalisationRequestTopic,
+                                          dds::TypeSupport(new wire::LocalisationRequestPubSubType())));
+  MRVS_ASSIGN_OR_RETURN(topics.localisation_replies,
+                        participant.topic(kLocalisationReplyTopic,
+                                          dds::TypeSupport(new wire::LocalisationReplyPubSubType())));
   return topics;
 }
 

@@ -3,6 +3,8 @@
 // pitch, velocity and biases keep what the initialiser knew.
 #include <random>
 
+#include <Eigen/Eigenvalues>
+
 #include <gtest/gtest.h>
 
 #include "mrvs/edge/global_alignment.h"
@@ -76,6 +78,147 @@ TEST(GlobalAlignment, OnlyBeforeTheFirstClone) {
   State s = initialised_state();
   ASSERT_TRUE(augment_clone(s, 1000, Vec3d::Zero()).ok());
   EXPECT_EQ(align_state(s, SE3d(), 0.02, 0.01).code(), absl::StatusCode::kFailedPrecondition);
+}
+
+}  // namespace
+}  // namespace mrvs::edge
+
+// ---- Re-anchoring a running state into the map frame (the localisation answer) ----------
+
+namespace mrvs::edge {
+namespace {
+
+/// A state with two clones and two points, and a random full covariance.
+State running_state() {
+  State s = initialised_state();
+  EXPECT_TRUE(augment_clone(s, 1000, Vec3d(0.1, -0.2, 0.3)).ok());
+  s.imu.q_w_b = rpy(2.0, 5.0, 40.0);
+  s.imu.p_w_b = Vec3d(0.8, 0.1, 0.3);
+  EXPECT_TRUE(augment_clone(s, 2000, Vec3d(0.0, 0.1, -0.2)).ok());
+  for (FeatureId id : {FeatureId{7}, FeatureId{9}}) {
+    PointState p;
+    p.p_w = p.fej = Vec3d(2.0 + id, -1.0, 1.2);
+    p.slot = s.append(3);
+    s.points[id] = p;
+  }
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g(0.0, 0.01);
+  Eigen::MatrixXd A(s.dim(), s.dim());
+  for (int i = 0; i < A.size(); ++i) A(i) = g(rng);
+  s.P = A * A.transpose() + 1e-4 * Eigen::MatrixXd::Identity(s.dim(), s.dim());
+  return s;
+}
+
+Mat6d alignment_covariance() {
+  Mat6d c = Mat6d::Zero();
+  c.diagonal() << 4e-4, 9e-4, 1e-4, 0.0, 0.0, 3e-5;
+  c(0, 5) = c(5, 0) = 2e-5;
+  c(0, 1) = c(1, 0) = -1e-4;
+  return c;
+}
+
+/// Jacobian (3 x dim) of f = R_w_b^T (x - p_w_b) for a point x of the state at `x_offset`
+/// (a point, or a clone's position): invariant when everything moves together.
+Eigen::MatrixXd relative_jacobian(const State& s, int x_offset, const Vec3d& x) {
+  const Mat3d Rt = s.imu.q_w_b.toRotationMatrix().transpose();
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, s.dim());
+  J.block<3, 3>(0, 0) = skew<double>(Vec3d(Rt * (x - s.imu.p_w_b)));
+  J.block<3, 3>(0, 3) = -Rt;
+  J.block<3, 3>(0, x_offset) += Rt;
+  return J;
+}
+
+TEST(Reanchor, MovesEverythingAndKeepsWhatIsRelative) {
+  const State before = running_state();
+  State s = before;
+  const SE3d T_m_o(Quatd(Eigen::AngleAxisd(70.0 * kDeg, Vec3d::UnitZ())), Vec3d(3.0, -2.0, 1.0));
+  const Vec3d anchor_m(2.0, 1.0, 0.5);
+  ASSERT_TRUE(reanchor_state(s, T_m_o, alignment_covariance(), anchor_m).ok());
+  // Values: everything moved by T_m_o.
+  const Vec3d p_moved = T_m_o * before.imu.p_w_b;
+  const Vec3d v_moved = T_m_o.rotation_matrix() * before.imu.v_w_b;
+  EXPECT_MATRIX_NEAR(s.imu.p_w_b, p_moved, 1e-12);
+  EXPECT_MATRIX_NEAR(s.imu.v_w_b, v_moved, 1e-12);
+  EXPECT_LT(so3::log<double>(s.imu.q_w_b.conjugate() * (T_m_o.quaternion() * before.imu.q_w_b)).norm(), 1e-12);
+  for (const auto& [t, c] : s.clones) {
+    const Vec3d p = T_m_o * before.clones.at(t).T_w_b.translation();
+    const Vec3d fej = T_m_o * before.clones.at(t).fej.translation();
+    EXPECT_MATRIX_NEAR(c.T_w_b.translation(), p, 1e-12);
+    EXPECT_MATRIX_NEAR(c.fej.translation(), fej, 1e-12);
+  }
+  for (const auto& [id, p] : s.points) {
+    const Vec3d moved = T_m_o * before.points.at(id).p_w;
+    const Vec3d moved_fej = T_m_o * before.points.at(id).fej;
+    EXPECT_MATRIX_NEAR(p.p_w, moved, 1e-12);
+    EXPECT_MATRIX_NEAR(p.fej, moved_fej, 1e-12);
+  }
+  // Relative geometry (points and clones seen from the IMU) keeps its covariance exactly.
+  for (const auto& [id, p] : s.points) {
+    const Eigen::MatrixXd Jb = relative_jacobian(before, p.slot.offset, before.points.at(id).p_w);
+    const Eigen::MatrixXd Ja = relative_jacobian(s, p.slot.offset, p.p_w);
+    EXPECT_MATRIX_NEAR(Ja * s.P * Ja.transpose(), Jb * before.P * Jb.transpose(), 1e-12);
+  }
+  for (const auto& [t, c] : s.clones) {
+    const int o = c.slot.offset + 3;
+    const Eigen::MatrixXd Jb = relative_jacobian(before, o, before.clones.at(t).T_w_b.translation());
+    const Eigen::MatrixXd Ja = relative_jacobian(s, o, c.T_w_b.translation());
+    EXPECT_MATRIX_NEAR(Ja * s.P * Ja.transpose(), Jb * before.P * Jb.transpose(), 1e-12);
+  }
+  // Biases: unchanged.
+  const Mat6d biases_after = s.P.block<6, 6>(9, 9);
+  const Mat6d biases_before = before.P.block<6, 6>(9, 9);
+  EXPECT_MATRIX_NEAR(biases_after, biases_before, 1e-15);
+  // Where the IMU is and its heading: the alignment's, moved from the anchor to the IMU.
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(4, s.dim());
+  C.block<3, 3>(0, 3).setIdentity();
+  C.block<1, 3>(3, 0) = (s.imu.q_w_b.conjugate() * Vec3d::UnitZ()).transpose();
+  Eigen::Matrix4d G = Eigen::Matrix4d::Identity();
+  G.block<3, 1>(0, 3) = Vec3d::UnitZ().cross(s.imu.p_w_b - anchor_m);
+  Eigen::Matrix4d S;
+  const int idx[4] = {0, 1, 2, 5};
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) S(a, b) = alignment_covariance()(idx[a], idx[b]);
+  EXPECT_MATRIX_NEAR(C * s.P * C.transpose(), G * S * G.transpose(), 1e-12);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(s.P).eigenvalues().minCoeff(), -1e-12);
+}
+
+TEST(Reanchor, GaugeDirectionsAreTheRigidMotionsOfTheState) {
+  const State s = running_state();
+  const Vec3d pivot(0.4, -0.3, 0.2);
+  const Eigen::MatrixXd N = gauge_directions(s, pivot);
+  // Numeric: move every value by a small rigid motion about +z through the pivot, read the
+  // error-state difference (orientation: right-perturbation, body frame).
+  auto moved_error = [&](const Eigen::Vector4d& d) {
+    const Mat3d R = Eigen::AngleAxisd(d(3), Vec3d::UnitZ()).toRotationMatrix();
+    auto move = [&](const Vec3d& p) { return Vec3d(R * (p - pivot) + pivot + d.head<3>()); };
+    Eigen::VectorXd dx = Eigen::VectorXd::Zero(s.dim());
+    auto pose = [&](int o, const Quatd& q, const Vec3d& p) {
+      dx.segment<3>(o) = so3::log<double>(q.conjugate() * (Quatd(R) * q));
+      dx.segment<3>(o + 3) = move(p) - p;
+    };
+    pose(0, s.imu.q_w_b, s.imu.p_w_b);
+    dx.segment<3>(6) = R * s.imu.v_w_b - s.imu.v_w_b;
+    for (const auto& [t, c] : s.clones) pose(c.slot.offset, c.T_w_b.quaternion(), c.T_w_b.translation());
+    for (const auto& [id, p] : s.points) dx.segment<3>(p.slot.offset) = move(p.p_w) - p.p_w;
+    return dx;
+  };
+  const double h = 1e-6;
+  for (int k = 0; k < 4; ++k) {
+    Eigen::Vector4d d = Eigen::Vector4d::Zero();
+    d(k) = h;
+    const Eigen::VectorXd numeric = (moved_error(d) - moved_error(-d)) / (2 * h);
+    EXPECT_MATRIX_NEAR(numeric, N.col(k), 1e-7) << "direction " << k;
+  }
+}
+
+TEST(Reanchor, RefusesABrokenCovariance) {
+  State s = running_state();
+  Mat6d c = alignment_covariance();
+  c(0, 0) = NAN;
+  EXPECT_FALSE(reanchor_state(s, SE3d(), c, Vec3d::Zero()).ok());
+  c = alignment_covariance();
+  c(0, 1) = 1.0;
+  EXPECT_FALSE(reanchor_state(s, SE3d(), c, Vec3d::Zero()).ok());
 }
 
 }  // namespace

@@ -3,7 +3,8 @@
 // clients with the query engine, one reply per request, and publishes the map info
 // (transient local). Every request is checked first (too many rays, non-finite values, zero
 // direction, negative distance, unknown resolution) and answered with an error status
-// instead of points when it fails; the server keeps serving.
+// instead of points when it fails; the server keeps serving. With a Localiser it also serves
+// localisation requests (LocalisationServer) on the same participant.
 #include <atomic>
 #include <cstdint>
 #include <map>
@@ -11,6 +12,7 @@
 #include <mutex>
 #include <string>
 
+#include "mrvs/cloud/localisation_server.h"
 #include "mrvs/core/status.h"
 #include "mrvs/core/time.h"
 #include "mrvs/link/codec.h"
@@ -25,6 +27,10 @@ struct RayServerOptions {
   std::uint64_t map_checksum = 0;               ///< identifies the map content
   DurationNs stats_period_ns = 10'000'000'000;  ///< log the per-client counters this often (0 = never)
   std::uint64_t max_requests = 0;               ///< stop after answering this many (0 = serve until stop())
+  /// The localisation service (design/localisation.md) on the same participant, on its own
+  /// thread; nullptr: none (the map info says so).
+  std::shared_ptr<const localise::Localiser> localiser;
+  LocalisationServerOptions localisation;
 };
 
 /// Per-client counters.
@@ -51,6 +57,8 @@ class RayServer {
   /// Snapshot of the counters, keyed by client id.
   std::map<std::uint32_t, ClientCounters> counters() const;
   std::uint64_t requests_answered() const { return answered_.load(); }
+  /// nullptr without a localiser.
+  const LocalisationServer* localisation() const { return localisation_.get(); }
 
  private:
   struct Dds;
@@ -63,6 +71,7 @@ class RayServer {
   map::QueryEngine engine_;
   RayServerOptions options_;
   std::unique_ptr<Dds> dds_;
+  std::unique_ptr<LocalisationServer> localisation_;  ///< after dds_: stopped before the participant goes
   std::vector<double> resolutions_;
   std::vector<std::optional<Eigen::Vector3f>> hits_;  ///< reused per request
   std::vector<Eigen::Vector3f> normals_;              ///< reused per request (when asked)

@@ -94,6 +94,9 @@ struct DatasetOptions {
   /// Stat every listed image file when opening (recommended; the first missing ones are
   /// named in the error).
   bool check_image_files = true;
+  /// Read state_groundtruth_estimate0 when present. Off: the ground-truth files are never
+  /// opened (what a run without ground truth does; groundtruth() stays empty).
+  bool read_groundtruth = true;
 };
 
 /// Time-ordered records of one sequence. All timestamps are int64 ns on the dataset's clock.

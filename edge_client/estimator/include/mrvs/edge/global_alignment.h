@@ -1,13 +1,16 @@
 #pragma once
-// One-time alignment of the odometry frame to the map / ground-truth frame at
-// initialisation (algorithm.md 6.2, decision 7), from a "global localisation pose":
+// Alignment of the odometry frame to the map frame (algorithm.md 6.2, decision 7):
+//   map       (the default) no pose at initialisation: the filter runs in its odometry frame
+//             until the cloud's localisation service places it in the map (MapLocaliser),
+//             then reanchor_state() moves it; again after every restart;
+// or, once at initialisation, from a "global localisation pose" (the named ablations):
 //   gt        the ground-truth pose at the initialisation time;
 //   gt_noisy  the same with a translation error of random direction whose length is drawn
 //             from N(mean, sd) (default: the paper's 2 cm mean);
 //   constant  a fixed T_w_o applied to the odometry frame;
 //   none      the odometry frame stays (gravity aligned, yaw and position from the start).
 // The target fixes position and heading (4 degrees of freedom); roll and pitch stay the
-// inertial estimate. Ground truth is used nowhere else.
+// inertial estimate. Ground truth is read only by gt and gt_noisy.
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -21,7 +24,7 @@
 namespace mrvs::edge {
 
 struct AlignmentOptions : config::OptionsEquality<AlignmentOptions> {
-  std::string source = "gt_noisy";                    ///< gt | gt_noisy | constant | none
+  std::string source = "map";                         ///< map | gt | gt_noisy | constant | none
   double translation_noise_mean_m = 0.02;             ///< gt_noisy: mean length of the error
   double translation_noise_sd_m = 0.005;              ///< gt_noisy: its spread
   double rotation_noise_deg = 0.0;                    ///< gt_noisy: rotation error (random axis)
@@ -31,7 +34,8 @@ struct AlignmentOptions : config::OptionsEquality<AlignmentOptions> {
   template <class V>
   void visit(V& v) {
     using namespace mrvs::config::constraints;
-    v("source", source, one_of({"gt", "gt_noisy", "constant", "none"}), "global pose at initialisation");
+    v("source", source, one_of({"map", "gt", "gt_noisy", "constant", "none"}),
+      "map (the cloud's localisation) | gt | gt_noisy (the paper's protocol) | constant | none");
     v("translation_noise_mean_m", translation_noise_mean_m, in_range(0.0, 100.0), "gt_noisy: mean error, m");
     v("translation_noise_sd_m", translation_noise_sd_m, in_range(0.0, 100.0), "gt_noisy: error spread, m");
     v("rotation_noise_deg", rotation_noise_deg, in_range(0.0, 180.0), "gt_noisy: rotation error, deg");
@@ -44,9 +48,14 @@ struct AlignmentOptions : config::OptionsEquality<AlignmentOptions> {
 /// OutOfRange when t_ns is outside the trajectory.
 StatusOr<SE3d> interpolate_trajectory(const io::Trajectory& trajectory, TimestampNs t_ns);
 
+/// True when `options` reads ground truth (gt, gt_noisy).
+inline bool needs_groundtruth(const AlignmentOptions& options) {
+  return options.source == "gt" || options.source == "gt_noisy";
+}
+
 /// The pose the state should take at its current time (IMU clock), per `options`:
 /// `groundtruth` is needed for gt / gt_noisy (FailedPrecondition naming the fix otherwise).
-/// nullopt for none.
+/// nullopt for none and map (which aligns later, from the cloud).
 StatusOr<std::optional<SE3d>> alignment_target(const AlignmentOptions& options,
                                                const io::Trajectory& groundtruth, const State& state);
 
@@ -59,5 +68,27 @@ StatusOr<std::optional<SE3d>> alignment_target(const AlignmentOptions& options,
 /// rest. Roll, pitch and the biases keep their estimates and covariance. Only before the
 /// first clone.
 Status align_state(State& state, const SE3d& T_w_b, double position_sigma, std::optional<double> yaw_sigma);
+
+/// The heading of T's rotation: the angle about +z that best matches it (its roll and pitch
+/// left out), rad.
+double yaw_of(const SE3d& T);
+/// T with its rotation replaced by the rotation about +z of yaw_of(T).
+SE3d yaw_only(const SE3d& T);
+
+/// The four directions in which a gravity-aligned VIO state cannot be observed: moving and
+/// turning everything together (translation x, y, z, then yaw about +z through `pivot`), as
+/// columns over the state's error (dim x 4). `pivot` is a point of the state's frame.
+Eigen::MatrixXd gauge_directions(const State& state, const Vec3d& pivot);
+
+/// Moves the whole state (IMU, clones, points and the points' first estimates) from the
+/// odometry frame o into the map frame m by T_m_o, keeping gravity: T_m_o's rotation is taken
+/// about +z only (its roll and pitch, if any, are dropped). The uncertainty of where the state
+/// lies, along gauge_directions() through the current IMU position, is replaced by the
+/// alignment's: `covariance` is that of [rho; phi] of a perturbation about `anchor_m` (map
+/// frame; mrvs/localisation/types.h), of which rho and phi_z are used. Everything relative
+/// (the clones to each other, the points to the clones, velocity in the body frame, biases,
+/// calibration) keeps its covariance. InvalidArgument for a non-finite or non-symmetric
+/// covariance.
+Status reanchor_state(State& state, const SE3d& T_m_o, const Mat6d& covariance, const Vec3d& anchor_m);
 
 }  // namespace mrvs::edge

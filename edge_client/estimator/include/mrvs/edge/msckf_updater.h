@@ -85,9 +85,12 @@ class MsckfUpdater {
 
   /// Updates `state` with the features `ids` of `db`: with their map point when `map_points`
   /// has one (used as `mode` says), otherwise triangulated.
+  /// `triangulated` (optional) receives the position of every feature used without a map
+  /// point, as triangulated before the update (the localisation submap's points).
   MsckfStats update(State& state, const FeatureDatabase& db, const std::vector<FeatureId>& ids,
                     const std::map<FeatureId, MapPoint>& map_points = {},
-                    Stage1Mode mode = Stage1Mode::kKnownLandmark) const;
+                    Stage1Mode mode = Stage1Mode::kKnownLandmark,
+                    std::vector<std::pair<FeatureId, Vec3d>>* triangulated = nullptr) const;
 
   /// Stage-1 rows of a feature whose position is the map point: kKnownLandmark keeps every
   /// row, its noise sigma^2 I + H_f (v I + association) H_f^T whitened to sigma^2 I; kMsckfNullspace
@@ -100,8 +103,10 @@ class MsckfUpdater {
   /// The null-space projected, gated rows of one feature (exposed for tests and issue 8);
   /// with `on_plane` (a map point with a plane) the plane row is stacked before the
   /// projection (Stage1Mode::kPlane). nullopt when it is not usable; `stats` counts why.
+  /// `position` (optional) receives the triangulated point of a usable feature.
   std::optional<Measurement> feature_measurement(const State& state, const FeatureTrack& track,
-                                                 MsckfStats* stats, const MapPoint* on_plane = nullptr) const;
+                                                 MsckfStats* stats, const MapPoint* on_plane = nullptr,
+                                                 Vec3d* position = nullptr) const;
 
   const MsckfOptions& options() const { return options_; }
 

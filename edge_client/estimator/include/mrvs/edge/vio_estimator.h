@@ -16,6 +16,7 @@
 #include "mrvs/edge/global_alignment.h"
 #include "mrvs/edge/initializer.h"
 #include "mrvs/edge/keyframe_policy.h"
+#include "mrvs/edge/map_localiser.h"
 #include "mrvs/edge/map_stage.h"
 #include "mrvs/edge/msckf_updater.h"
 #include "mrvs/edge/point_updater.h"
@@ -45,6 +46,7 @@ struct EstimatorOptions : config::OptionsEquality<EstimatorOptions> {
   KeyframeOptions keyframe;
   InitializerOptions initializer;
   AlignmentOptions alignment;
+  LocalisationOptions localisation;
   MapOptions map;
 
   template <class V>
@@ -56,7 +58,8 @@ struct EstimatorOptions : config::OptionsEquality<EstimatorOptions> {
     v.section("points", points, "point features in the state");
     v.section("keyframe", keyframe, "clone marginalisation");
     v.section("initializer", initializer, "initialisation");
-    v.section("alignment", alignment, "one-time alignment to the map frame");
+    v.section("alignment", alignment, "how the odometry frame is tied to the map frame");
+    v.section("localisation", localisation, "the cloud's localisation service (alignment.source map)");
     v.section("map", map, "the cloud map: stage-1 association, stage-2 registration");
   }
 };
@@ -73,7 +76,15 @@ struct EstimatorTiming {
 struct FrameOutput {
   TimestampNs t_ns = 0;  ///< camera time of the frame
   bool initialized = false;
-  std::optional<SE3d> T_w_b;  ///< IMU pose at the frame (IMU clock t_ns + t_d), map frame
+  int run = 0;  ///< filter run: 1 from the first initialisation, +1 after each restart
+  std::optional<SE3d> T_w_b;  ///< IMU pose at the frame (IMU clock t_ns + t_d), in the frame below
+  /// T_w_b is in the map frame (else the odometry frame: alignment.source map before the
+  /// cloud placed the filter, or after a restart until it does again).
+  bool in_map_frame = false;
+  /// Set at the frame the cloud's localisation was applied: earlier odometry-frame poses of
+  /// this filter run map into the map frame by it.
+  std::optional<SE3d> T_m_o;
+  LocalisationFrameStats localisation;
   TimestampNs t_imu_ns = 0;
   std::string status;  ///< why it waits, or what went wrong this frame
   MsckfStats msckf;
@@ -108,6 +119,18 @@ class VioEstimator {
   /// the filter is plain VIO.
   void set_map_service(MapService* service) { map_ = service; }
 
+  /// Where the cloud should look for the filter (outdoors: from GNSS), used by the next
+  /// localisation requests; nullopt: anywhere in the map.
+  void set_prior_region(const std::optional<localisation::PriorRegion>& prior) { prior_ = prior; }
+  /// Whether the submap wants a dense stereo pair of the frame at t_cam_ns.
+  bool wants_dense_submap(TimestampNs t_cam_ns) const;
+  /// Dense stereo points (cam0 frame, m) of the newest frame, fed after feed_frame() for it.
+  void add_dense_submap(TimestampNs t_cam_ns, const std::vector<Eigen::Vector3f>& points_c0);
+  /// Whether the state is in the map frame.
+  bool in_map_frame() const { return in_map_frame_; }
+  /// What localisation is doing (alignment.source map).
+  const std::string& localisation_status() const { return localiser_.status(); }
+
   bool initialized() const { return state_.has_value(); }
   const State* state() const { return state_ ? &*state_ : nullptr; }
   const EstimatorOptions& options() const { return options_; }
@@ -122,7 +145,8 @@ class VioEstimator {
   StatusOr<FrameOutput> initialize(const FeatureFrame& frame);
   Status start(const InitializationResult& init, const FeatureFrame& frame);
   StatusOr<FrameOutput> track(const FeatureFrame& frame);
-  void update(const FeatureFrame& frame, FrameOutput* out);
+  /// `triangulated` receives the MSCKF features' triangulated points (for the submap).
+  void update(const FeatureFrame& frame, FrameOutput* out, std::vector<std::pair<FeatureId, Vec3d>>* triangulated);
   void update_points(const FeatureFrame& frame, const std::vector<FeatureId>& point_ids, bool use_map,
                      FrameOutput* out);
   void marginalize(TimestampNs marg_ns, FrameOutput* out);
@@ -130,6 +154,11 @@ class VioEstimator {
   /// The first gap longer than max_imu_gap_s in (from_ns, to_ns], as a message.
   std::optional<std::string> imu_gap(TimestampNs from_ns, TimestampNs to_ns) const;
   void restart();
+  /// alignment.source map with the map on: the cloud's localisation ties the frames.
+  bool localises() const;
+  /// Feeds the submap with this frame's points, runs the localiser, applies its answer.
+  void localise(const FeatureFrame& frame, const std::vector<std::pair<FeatureId, Vec3d>>& triangulated,
+                FrameOutput* out);
 
   EstimatorOptions options_;
   config::StereoRigCalibration rig_;
@@ -142,6 +171,9 @@ class VioEstimator {
   PointUpdater points_;
   MapStage map_stage_;
   MapService* map_ = nullptr;
+  MapLocaliser localiser_;
+  std::optional<localisation::PriorRegion> prior_;
+  bool in_map_frame_ = false;  ///< the state is in the map frame (aligned at start or localised)
   RegisteredMap registered_;
   SurfaceMap surfaces_;  ///< every map point the cloud answered (stage1_mode plane's planes)
   /// The surfaces to feed and fit: only stage1_mode plane uses them.
@@ -153,6 +185,7 @@ class VioEstimator {
   FeatureDatabase db_;
   std::deque<io::ImuSample> imu_;
   TimestampNs init_ns_ = 0;
+  int run_ = 0;  ///< initialisations so far
   Vec3d last_w_b_ = Vec3d::Zero();
   std::string waiting_;
   std::string init_summary_;

@@ -16,6 +16,9 @@ class DdsMapService : public MapService {
   std::optional<MapDescription> description() override;
   MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout,
                  bool want_normals) override;
+  bool offers_localisation() override;
+  StatusOr<std::size_t> send_localisation(const localisation::Request& request, float quantum_m) override;
+  std::vector<LocalisationReply> poll_localisation() override;
 
   const MapClientStats& stats() const { return client_->stats(); }
   MapClient& client() { return *client_; }
@@ -26,6 +29,7 @@ class DdsMapService : public MapService {
   bool outage_ = false;
   TimestampNs outage_since_ns_ = 0;
   std::uint64_t outage_requests_ = 0;
+  bool warned_protocol_ = false;
 };
 
 }  // namespace mrvs::edge

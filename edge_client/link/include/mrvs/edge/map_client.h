@@ -6,7 +6,9 @@
 // answered again, without restarting the client.
 //
 // Not thread-safe: one thread (the estimator's) uses a client.
+#include <chrono>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -14,6 +16,7 @@
 #include "mrvs/core/status.h"
 #include "mrvs/core/time.h"
 #include "mrvs/link/codec.h"
+#include "mrvs/localisation/types.h"
 #include "mrvs/link/participant.h"
 #include "mrvs/voxel/ray_query.h"
 
@@ -50,6 +53,18 @@ struct MapClientStats {
   std::uint64_t foreign_dropped = 0;  ///< replies for other clients (all clients share the reply topic)
   std::uint64_t corrupt_dropped = 0;  ///< replies inconsistent with their request
   std::uint64_t map_changes = 0;      ///< map info updates with a different checksum
+  std::uint64_t localisation_sent = 0;
+  std::uint64_t localisation_replies = 0;
+  std::uint64_t localisation_bytes_up = 0;    ///< CDR payload of the requests
+  std::uint64_t localisation_bytes_down = 0;  ///< ... of the replies
+};
+
+/// A localisation reply taken by the client.
+struct LocalisationAnswer {
+  std::uint64_t seq = 0;
+  localisation::Result result;
+  std::size_t bytes = 0;  ///< CDR payload
+  DurationNs rtt_ns = 0;  ///< since the request was written
 };
 
 class MapClient {
@@ -69,6 +84,12 @@ class MapClient {
   QueryReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout,
                    bool want_normals = false);
 
+  /// Writes a localisation request (points quantised to quantum_m; those out of the int16
+  /// range are left out, logged). Returns the payload bytes; error when it cannot be written.
+  StatusOr<std::size_t> send_localisation(const localisation::Request& request, float quantum_m);
+  /// This client's localisation replies that arrived (decoded; corrupt ones logged, dropped).
+  std::vector<LocalisationAnswer> take_localisation_replies();
+
   const MapClientStats& stats() const { return stats_; }
 
  private:
@@ -82,6 +103,7 @@ class MapClient {
   std::uint32_t client_id_ = 0;
   std::uint64_t next_seq_ = 1;
   std::optional<link::MapInfo> map_info_;
+  std::map<std::uint64_t, std::chrono::steady_clock::time_point> localisation_sent_;  ///< by seq
   MapClientStats stats_;
 };
 

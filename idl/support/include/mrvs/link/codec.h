@@ -70,6 +70,8 @@ struct MapInfo {
   std::vector<double> resolutions;
   std::uint32_t max_rays_per_batch = 0;
   std::uint32_t protocol_version = 0;
+  /// The localisation protocol the cloud serves (LOCALISATION_PROTOCOL_VERSION), 0 for none.
+  std::uint32_t localisation_protocol_version = 0;
 };
 wire::MapInfo encode_map_info(const MapInfo& info);
 /// Error for another protocol version or an empty level list.

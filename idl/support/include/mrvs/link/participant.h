@@ -28,6 +28,8 @@ inline constexpr const char* kMapInfoReaderProfile = "mrvs_map_info_reader";
 inline constexpr const char* kRequestTopic = "mrvs/ray_requests";
 inline constexpr const char* kReplyTopic = "mrvs/ray_replies";
 inline constexpr const char* kMapInfoTopic = "mrvs/map_info";
+inline constexpr const char* kLocalisationRequestTopic = "mrvs/localisation_requests";
+inline constexpr const char* kLocalisationReplyTopic = "mrvs/localisation_replies";
 
 struct ParticipantOptions {
   std::filesystem::path profile_file;  ///< config/dds/<profile>.xml
@@ -66,11 +68,13 @@ class Participant {
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
 };
 
-/// The three topics of the link in one participant.
+/// The topics of the link in one participant: ray queries, map info, localisation.
 struct LinkTopics {
   eprosima::fastdds::dds::Topic* requests = nullptr;
   eprosima::fastdds::dds::Topic* replies = nullptr;
   eprosima::fastdds::dds::Topic* map_info = nullptr;
+  eprosima::fastdds::dds::Topic* localisation_requests = nullptr;
+  eprosima::fastdds::dds::Topic* localisation_replies = nullptr;
 };
 /// Creates them; `request_type` is the requests' type support (the server reads with room
 /// beyond the IDL bound, link/types.h). Empty = the generated one.

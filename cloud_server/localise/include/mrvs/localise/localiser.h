@@ -1,0 +1,99 @@
+#pragma once
+// The cloud's localisation service (design/localisation.md): where does the edge's odometry
+// frame lie in this map? From the edge's submap (points in its odometry frame, gravity known)
+// and an optional prior region:
+//   1. coarse: branch-and-bound over (x, y, z, yaw) on a likelihood grid of the map's coarsest
+//      level, exact on the grid's lattice, keeping the best few mutually distinct poses;
+//   2. fine: 4-DoF point-to-plane ICP of each against a finer level (with normals);
+//   3. verify: fitness (share of the submap on the map's surface), ambiguity (the best distinct
+//      other pose's fitness over the best's), and the covariance from the fine stage's
+//      information matrix, inflated (registration covariances are optimistic).
+// Read-only after create(): localise() is thread-safe and runs on the calling thread.
+#include <memory>
+#include <string>
+
+#include "mrvs/config/options.h"
+#include "mrvs/core/status.h"
+#include "mrvs/localisation/types.h"
+#include "mrvs/map/voxel_map.h"
+
+namespace mrvs::localise {
+
+struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
+  int min_points = 100;                 ///< fewer submap points: bad request
+  double coarse_resolution_m = 0.1;     ///< the coarse grid's cell, m
+  int coarse_max_points = 800;          ///< submap points scored by the coarse search
+  double yaw_step_deg = 0.0;            ///< 0: the cell seen from the submap's far points
+  int branch_levels = 5;                ///< pyramid levels of the branch and bound
+  double coarse_min_score = 0.15;       ///< a pose scoring less is no hypothesis, [0, 1]
+  long long max_grid_cells = 50000000;  ///< larger search regions are refused (send a prior region)
+  int hypotheses = 4;                   ///< distinct coarse poses refined
+  double distinct_m = 0.5;              ///< poses closer than this ...
+  double distinct_deg = 10.0;           ///< ... and turned less than this are one
+  double fine_resolution_m = 0.03;      ///< the map level the fine stage registers to, m
+  double fine_voxel_m = 0.05;           ///< the submap is thinned to one point per this cell, m
+  int fine_max_points = 3000;
+  int fine_iterations = 25;
+  double fine_start_distance_m = 0.3;   ///< correspondence distance, first iteration, m
+  double fine_end_distance_m = 0.1;     ///< ... last iterations, m
+  double huber_m = 0.03;                ///< point-to-plane residuals beyond are down-weighted, m
+  int normal_knn = 12;                  ///< map points in a normal's fit
+  double normal_max_rms_m = 0.01;       ///< rougher neighbourhoods have no normal, m
+  double inlier_m = 0.05;               ///< submap points this close to the map are on it, m
+  double min_fitness = 0.5;             ///< less: outside the map
+  double max_ambiguity = 0.8;           ///< more: ambiguous
+  double covariance_inflation = 25.0;   ///< variance factor on the information matrix's inverse
+  double max_sigma_m = 0.1;             ///< a less certain translation: too little structure, m
+  double max_sigma_deg = 1.0;           ///< a less certain yaw: too little structure, deg
+
+  template <class V>
+  void visit(V& v) {
+    using namespace mrvs::config::constraints;
+    v("min_points", min_points, in_range(10, 100000), "submap points a request needs");
+    v("coarse_resolution_m", coarse_resolution_m, in_range(0.01, 10.0), "coarse grid cell, m");
+    v("coarse_max_points", coarse_max_points, in_range(10, 100000), "submap points of the coarse search");
+    v("yaw_step_deg", yaw_step_deg, in_range(0.0, 45.0), "coarse yaw step, deg (0: from the cell and range)");
+    v("branch_levels", branch_levels, in_range(1, 12), "branch-and-bound pyramid levels");
+    v("coarse_min_score", coarse_min_score, in_range(0.0, 1.0), "least coarse score of a hypothesis");
+    v("max_grid_cells", max_grid_cells, in_range(1000LL, 2000000000LL), "largest search grid, cells");
+    v("hypotheses", hypotheses, in_range(1, 64), "distinct coarse poses refined");
+    v("distinct_m", distinct_m, in_range(0.0, 1000.0), "poses this close (and turned less) are one, m");
+    v("distinct_deg", distinct_deg, in_range(0.0, 180.0), "poses turned less (and this close) are one, deg");
+    v("fine_resolution_m", fine_resolution_m, in_range(0.001, 10.0), "map level of the fine stage, m");
+    v("fine_voxel_m", fine_voxel_m, in_range(0.001, 10.0), "submap thinning cell of the fine stage, m");
+    v("fine_max_points", fine_max_points, in_range(10, 1000000), "submap points of the fine stage");
+    v("fine_iterations", fine_iterations, in_range(1, 1000), "fine stage iterations");
+    v("fine_start_distance_m", fine_start_distance_m, in_range(0.001, 100.0), "first correspondence distance, m");
+    v("fine_end_distance_m", fine_end_distance_m, in_range(0.001, 100.0), "last correspondence distance, m");
+    v("huber_m", huber_m, in_range(0.0001, 100.0), "Huber threshold of the residuals, m");
+    v("normal_knn", normal_knn, in_range(3, 1000), "map points per normal fit");
+    v("normal_max_rms_m", normal_max_rms_m, in_range(0.0, 10.0), "roughest plane given a normal, m");
+    v("inlier_m", inlier_m, in_range(0.001, 100.0), "distance of a submap point on the map, m");
+    v("min_fitness", min_fitness, in_range(0.0, 1.0), "least fitness of an answer");
+    v("max_ambiguity", max_ambiguity, in_range(0.0, 1.0), "largest ambiguity of an answer");
+    v("covariance_inflation", covariance_inflation, in_range(1.0, 1e6), "variance factor of the covariance");
+    v("max_sigma_m", max_sigma_m, in_range(0.0001, 100.0), "largest translation sd of an answer, m");
+    v("max_sigma_deg", max_sigma_deg, in_range(0.001, 180.0), "largest yaw sd of an answer, deg");
+  }
+};
+
+class Localiser {
+ public:
+  /// Precomputes the fine level's normals and k-d tree. Error when fine_resolution_m is not a
+  /// level of the map or the map is empty.
+  static StatusOr<Localiser> create(std::shared_ptr<const map::VoxelMap> map, const LocaliserOptions& options);
+
+  /// One attempt; every failure is a status of the result, never an error.
+  localisation::Result localise(const localisation::Request& request) const;
+
+  const LocaliserOptions& options() const;
+  /// Seconds spent in create() (normals, tree).
+  double setup_s() const;
+
+ struct Impl;  ///< the map's precomputed parts (localiser.cpp)
+
+ private:
+  std::shared_ptr<const Impl> impl_;
+};
+
+}  // namespace mrvs::localise

@@ -1,0 +1,157 @@
+#include "correlative_search.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "mrvs/geometry/angles.h"
+
+namespace mrvs::localise {
+namespace {
+
+struct Candidate {
+  int yaw = 0;
+  Eigen::Vector3i cell = Eigen::Vector3i::Zero();  ///< lowest anchor cell of the window
+  int level = 0;                                   ///< window of 2^level cells per axis
+  int score = 0;                                   ///< sum of the level's values (upper bound)
+};
+
+/// The points of one yaw step as cell offsets from the anchor's cell.
+struct RotatedPoints {
+  double yaw = 0.0;
+  std::vector<Eigen::Vector3i> offsets;
+};
+
+class Search {
+ public:
+  Search(const LikelihoodPyramid& grid, const SearchWindow& window, const SearchOptions& options,
+         std::vector<RotatedPoints> rotated)
+      : grid_(grid), window_(window), options_(options), rotated_(std::move(rotated)) {
+    min_sum_ = static_cast<int>(std::ceil(options.min_score * 255.0 * static_cast<double>(num_points())));
+  }
+
+  void run() {
+    std::vector<Candidate> roots;
+    const int top = grid_.levels() - 1;
+    const int step = 1 << top;
+    for (int k = 0; k < static_cast<int>(rotated_.size()); ++k) {
+      for (int z = window_.anchor_min.z(); z <= window_.anchor_max.z(); z += step) {
+        for (int y = window_.anchor_min.y(); y <= window_.anchor_max.y(); y += step) {
+          for (int x = window_.anchor_min.x(); x <= window_.anchor_max.x(); x += step) {
+            roots.push_back(scored({k, Eigen::Vector3i(x, y, z), top, 0}));
+          }
+        }
+      }
+    }
+    descend(roots);
+  }
+
+  std::vector<Hypothesis> take() { return std::move(kept_); }
+  long long nodes() const { return nodes_; }
+
+ private:
+  std::size_t num_points() const { return rotated_.empty() ? 0 : rotated_.front().offsets.size(); }
+
+  Candidate scored(Candidate c) {
+    int sum = 0;
+    for (const Eigen::Vector3i& o : rotated_[static_cast<std::size_t>(c.yaw)].offsets) {
+      sum += grid_.value(c.level, c.cell + o);
+    }
+    c.score = sum;
+    ++nodes_;
+    return c;
+  }
+
+  /// What a window must beat to matter: the last kept hypothesis once the list is full.
+  int threshold() const {
+    if (static_cast<int>(kept_.size()) < options_.max_hypotheses) return min_sum_;
+    return std::max(min_sum_, static_cast<int>(std::floor(kept_.back().score * 255.0 * num_points())));
+  }
+
+  void descend(std::vector<Candidate>& candidates) {
+    std::sort(candidates.begin(), candidates.end(),
+              [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+    for (const Candidate& c : candidates) {
+      if (c.score <= threshold()) break;  // sorted: no later one can do better
+      if (c.level == 0) {
+        leaf(c);
+        continue;
+      }
+      std::vector<Candidate> children;
+      const int half = 1 << (c.level - 1);
+      for (int i = 0; i < 8; ++i) {
+        const Eigen::Vector3i cell = c.cell + Eigen::Vector3i(i & 1, (i >> 1) & 1, (i >> 2) & 1) * half;
+        if ((cell.array() > window_.anchor_max.array()).any()) continue;
+        children.push_back(scored({c.yaw, cell, c.level - 1, 0}));
+      }
+      descend(children);
+    }
+  }
+
+  void leaf(const Candidate& c) {
+    Hypothesis h;
+    h.yaw = rotated_[static_cast<std::size_t>(c.yaw)].yaw;
+    h.anchor = grid_.corner(c.cell) + Eigen::Vector3d::Constant(0.5 * grid_.resolution());
+    if (window_.radius_m && (h.anchor - window_.centre).norm() > *window_.radius_m) return;
+    h.score = static_cast<double>(c.score) / (255.0 * static_cast<double>(num_points()));
+    for (Hypothesis& k : kept_) {
+      if (!same_pose(k, h, options_)) continue;
+      if (h.score > k.score) k = h;
+      sort_kept();
+      return;
+    }
+    kept_.push_back(h);
+    sort_kept();
+    if (static_cast<int>(kept_.size()) > options_.max_hypotheses) kept_.pop_back();
+  }
+
+  void sort_kept() {
+    std::sort(kept_.begin(), kept_.end(), [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
+  }
+
+  const LikelihoodPyramid& grid_;
+  const SearchWindow& window_;
+  const SearchOptions& options_;
+  std::vector<RotatedPoints> rotated_;
+  std::vector<Hypothesis> kept_;
+  int min_sum_ = 0;
+  long long nodes_ = 0;
+};
+
+}  // namespace
+
+double yaw_difference(double a, double b) {
+  const double d = std::remainder(a - b, 2.0 * kPi);
+  return std::abs(d);
+}
+
+bool same_pose(const Hypothesis& a, const Hypothesis& b, const SearchOptions& options) {
+  return (a.anchor - b.anchor).norm() < options.distinct_m && yaw_difference(a.yaw, b.yaw) < options.distinct_rad;
+}
+
+std::vector<Hypothesis> correlative_search(const LikelihoodPyramid& grid, const std::vector<Eigen::Vector3d>& points,
+                                           const SearchWindow& window, const SearchOptions& options,
+                                           SearchStats* stats) {
+  if (points.empty() || (window.anchor_min.array() > window.anchor_max.array()).any()) return {};
+  const int yaws = std::max(1, static_cast<int>(std::ceil(2.0 * kPi / window.yaw_step_rad)));
+  std::vector<RotatedPoints> rotated(static_cast<std::size_t>(yaws));
+  // The anchor sits at the centre of its cell: a point's cell is floor(p / r + 0.5) cells away.
+  const double inv = 1.0 / grid.resolution();
+  for (int k = 0; k < yaws; ++k) {
+    RotatedPoints& rp = rotated[static_cast<std::size_t>(k)];
+    rp.yaw = 2.0 * kPi * k / yaws;
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(rp.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    rp.offsets.reserve(points.size());
+    for (const Eigen::Vector3d& p : points) {
+      rp.offsets.push_back(((R * p) * inv + Eigen::Vector3d::Constant(0.5)).array().floor().cast<int>());
+    }
+  }
+  Search search(grid, window, options, std::move(rotated));
+  search.run();
+  if (stats) {
+    stats->nodes = search.nodes();
+    stats->yaws = yaws;
+  }
+  return search.take();
+}
+
+}  // namespace mrvs::localise

@@ -1,0 +1,334 @@
+#include "mrvs/localise/localiser.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+#include <variant>
+
+#include <fmt/format.h>
+#include <Eigen/Eigenvalues>
+
+#include "correlative_search.h"
+#include "likelihood_grid.h"
+#include "map_surface.h"
+#include "mrvs/core/hash.h"
+#include "mrvs/geometry/angles.h"
+#include "point_to_plane.h"
+
+namespace mrvs::localise {
+
+using localisation::Request;
+using localisation::Result;
+using LStatus = localisation::Status;
+
+struct Localiser::Impl {
+  std::shared_ptr<const map::VoxelMap> map;
+  LocaliserOptions options;
+  const std::vector<map::MapPoint>* coarse = nullptr;  ///< the coarsest level's points
+  std::vector<Eigen::Vector3f> coarse_points;
+  Eigen::AlignedBox3d bounds;  ///< of the map's points, map-local
+  MapSurface surface;
+  double setup_s = 0.0;
+};
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+Result failure(LStatus status, std::string detail) {
+  Result r;
+  r.status = status;
+  r.detail = std::move(detail);
+  return r;
+}
+
+/// The request's problems, or empty.
+std::string check_request(const Request& q, const LocaliserOptions& o) {
+  if (static_cast<int>(q.points.size()) < o.min_points) {
+    return fmt::format("{} submap points, at least {} needed", q.points.size(), o.min_points);
+  }
+  for (std::size_t i = 0; i < q.points.size(); ++i) {
+    if (!q.points[i].allFinite()) return fmt::format("submap point {} is not finite", i);
+  }
+  if (!q.gravity_o.allFinite() || std::abs(q.gravity_o.norm() - 1.0) > 0.1) {
+    return "gravity must be a unit vector";
+  }
+  if (!q.anchor_o.allFinite()) return "the anchor is not finite";
+  if (q.prior && (!q.prior->centre_m.allFinite() || !(q.prior->radius_m > 0.0) || !std::isfinite(q.prior->radius_m))) {
+    return "the prior region needs a finite centre and a radius > 0";
+  }
+  return {};
+}
+
+/// One point per cell of `cell` (the mean of the cell's points), then at most max_points of
+/// them, evenly spread over the list; deterministic.
+std::vector<Eigen::Vector3d> thin(const std::vector<Eigen::Vector3d>& points, double cell, int max_points) {
+  std::unordered_map<std::uint64_t, std::pair<Eigen::Vector3d, int>> cells;
+  std::vector<std::uint64_t> order;
+  for (const Eigen::Vector3d& p : points) {
+    const Eigen::Vector3i c = (p / cell).array().floor().cast<int>();
+    const std::uint64_t key = mix64((static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 42) ^
+                                    (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y())) << 21) ^
+                                    static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z())));
+    auto [it, fresh] = cells.try_emplace(key, Eigen::Vector3d::Zero(), 0);
+    if (fresh) order.push_back(key);
+    it->second.first += p;
+    ++it->second.second;
+  }
+  std::vector<Eigen::Vector3d> out;
+  const std::size_t n = order.size();
+  const std::size_t m = std::min<std::size_t>(n, static_cast<std::size_t>(max_points));
+  out.reserve(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    const auto& [sum, count] = cells[order[i * n / m]];
+    out.push_back(sum / count);
+  }
+  return out;
+}
+
+/// Rotation taking the odometry frame's gravity to -z (the map's).
+Eigen::Matrix3d gravity_rotation(const Eigen::Vector3d& g_o) {
+  return Eigen::Quaterniond::FromTwoVectors(g_o.normalized(), -Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+double horizontal_reach(const std::vector<Eigen::Vector3d>& points) {
+  std::vector<double> r;
+  r.reserve(points.size());
+  for (const Eigen::Vector3d& p : points) r.push_back(p.head<2>().norm());
+  if (r.empty()) return 0.0;
+  const std::size_t k = (r.size() * 95) / 100;
+  std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(std::min(k, r.size() - 1)), r.end());
+  return r[std::min(k, r.size() - 1)];
+}
+
+
+struct Prepared {
+  Eigen::Matrix3d R_g = Eigen::Matrix3d::Identity();  ///< odometry frame -> gravity-aligned
+  std::vector<Eigen::Vector3d> coarse, fine;          ///< gravity-aligned, relative to the anchor
+  double reach_m = 0.0;                               ///< horizontal, 95th percentile
+  double height_m = 0.0;                              ///< largest |z|
+};
+
+Prepared prepare(const Request& q, const LocaliserOptions& o) {
+  Prepared p;
+  p.R_g = gravity_rotation(q.gravity_o);
+  std::vector<Eigen::Vector3d> aligned;
+  aligned.reserve(q.points.size());
+  for (const Eigen::Vector3f& x : q.points) aligned.push_back(p.R_g * x.cast<double>());
+  p.coarse = thin(aligned, o.coarse_resolution_m, o.coarse_max_points);
+  p.fine = thin(aligned, o.fine_voxel_m, o.fine_max_points);
+  p.reach_m = horizontal_reach(p.coarse);
+  for (const Eigen::Vector3d& x : p.coarse) p.height_m = std::max(p.height_m, std::abs(x.z()));
+  return p;
+}
+
+/// Where the anchor is searched and the grid that scores it (map-local).
+struct Region {
+  Eigen::AlignedBox3d anchors;
+  Eigen::AlignedBox3d grid;
+  std::optional<double> radius_m;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+};
+
+std::variant<Region, Result> search_region(const Localiser::Impl& m, const Request& q, const Prepared& p) {
+  const LocaliserOptions& o = m.options;
+  const double res = o.coarse_resolution_m;
+  Region r;
+  r.anchors = Eigen::AlignedBox3d(m.bounds.min() - Eigen::Vector3d::Constant(res),
+                                  m.bounds.max() + Eigen::Vector3d::Constant(res));
+  if (q.prior) {
+    r.centre = q.prior->centre_m - m.map->origin;
+    r.radius_m = q.prior->radius_m;
+    const Eigen::Vector3d half = Eigen::Vector3d::Constant(q.prior->radius_m);
+    r.anchors = r.anchors.intersection(Eigen::AlignedBox3d(r.centre - half, r.centre + half));
+    if (r.anchors.isEmpty()) {
+      return failure(LStatus::kOutsideMap, fmt::format("the prior region ({:.1f} m around [{:.1f} {:.1f} {:.1f}]) "
+                                                       "does not overlap the map",
+                                                       q.prior->radius_m, q.prior->centre_m.x(),
+                                                       q.prior->centre_m.y(), q.prior->centre_m.z()));
+    }
+  }
+  const Eigen::Vector3d reach(p.reach_m + 2 * res, p.reach_m + 2 * res, p.height_m + 2 * res);
+  r.grid = Eigen::AlignedBox3d(r.anchors.min() - reach, r.anchors.max() + reach)
+               .intersection(Eigen::AlignedBox3d(m.bounds.min() - Eigen::Vector3d::Constant(2 * res),
+                                                 m.bounds.max() + Eigen::Vector3d::Constant(2 * res)));
+  const double cells = (r.grid.sizes() / res).array().ceil().prod();
+  if (cells > static_cast<double>(o.max_grid_cells)) {
+    return failure(LStatus::kBadRequest,
+                   fmt::format("the search region needs {:.0f} grid cells, more than localise.max_grid_cells "
+                               "({}): send a prior region (e.g. from GNSS)",
+                               cells, o.max_grid_cells));
+  }
+  return r;
+}
+
+struct Refined {
+  Hypothesis pose;  ///< refined yaw and anchor; score = coarse score
+  FineResult fine;
+};
+
+std::vector<Refined> refine_all(const Localiser::Impl& m, const Prepared& p, const std::vector<Hypothesis>& coarse,
+                                const SearchOptions& so) {
+  const LocaliserOptions& o = m.options;
+  FineOptions fo;
+  fo.iterations = o.fine_iterations;
+  fo.start_distance_m = o.fine_start_distance_m;
+  fo.end_distance_m = o.fine_end_distance_m;
+  fo.huber_m = o.huber_m;
+  fo.inlier_m = o.inlier_m;
+  std::vector<Refined> out;
+  for (const Hypothesis& h : coarse) {
+    Refined r;
+    r.fine = refine_pose(m.surface, p.fine, h.yaw, h.anchor, fo);
+    r.pose = {r.fine.yaw, r.fine.anchor, h.score};
+    const auto same = std::find_if(out.begin(), out.end(), [&](const Refined& x) { return same_pose(x.pose, r.pose, so); });
+    if (same == out.end()) {
+      out.push_back(r);
+    } else if (r.fine.fitness > same->fine.fitness) {
+      *same = r;
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const Refined& a, const Refined& b) { return a.fine.fitness > b.fine.fitness; });
+  return out;
+}
+
+/// The answer's covariance (6x6 [rho; phi]) from the fine stage; nullopt when singular.
+std::optional<Mat6d> covariance(const FineResult& f, double inflation) {
+  const Eigen::FullPivLU<Eigen::Matrix4d> lu(f.information);
+  if (f.information.isZero() || !lu.isInvertible()) return std::nullopt;
+  const double s2 = std::max(f.rmse_m * f.rmse_m, 1e-8);
+  const Eigen::Matrix4d c4 = inflation * s2 * lu.inverse();
+  if (!c4.allFinite()) return std::nullopt;
+  Mat6d c = Mat6d::Zero();
+  const int map6[4] = {0, 1, 2, 5};
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) c(map6[i], map6[j]) = c4(i, j);
+  }
+  return c;
+}
+
+Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p, const std::vector<Refined>& refined) {
+  const LocaliserOptions& o = m.options;
+  const Refined& best = refined.front();
+  Result r;
+  r.hypotheses = static_cast<int>(refined.size());
+  r.fitness = best.fine.fitness;
+  r.rmse_m = best.fine.rmse_m;
+  r.ambiguity = refined.size() > 1 && best.fine.fitness > 0 ? refined[1].fine.fitness / best.fine.fitness : 0.0;
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(best.pose.yaw, Eigen::Vector3d::UnitZ()) * p.R_g;
+  const Eigen::Vector3d anchor_m = best.pose.anchor + m.map->origin;
+  r.T_m_o = SE3d(Quatd(R).normalized(), anchor_m - R * q.anchor_o);
+  if (best.fine.fitness < o.min_fitness) {
+    r.status = LStatus::kOutsideMap;
+    r.detail = fmt::format("the best pose puts {:.0f} % of the submap on the map's surfaces, {:.0f} % needed",
+                           100 * best.fine.fitness, 100 * o.min_fitness);
+    return r;
+  }
+  const std::optional<Mat6d> cov = covariance(best.fine, o.covariance_inflation);
+  const double sigma_m = cov ? std::sqrt(cov->topLeftCorner<3, 3>().eigenvalues().real().maxCoeff()) : INFINITY;
+  const double sigma_deg = cov ? std::sqrt((*cov)(5, 5)) * kRadToDeg : INFINITY;
+  if (cov) r.covariance = *cov;
+  if (!(sigma_m <= o.max_sigma_m) || !(sigma_deg <= o.max_sigma_deg)) {
+    r.status = LStatus::kTooLittleStructure;
+    r.detail = fmt::format("the submap leaves the pose uncertain: {:.3f} m, {:.2f} deg (limits {} m, {} deg)",
+                           sigma_m, sigma_deg, o.max_sigma_m, o.max_sigma_deg);
+    return r;
+  }
+  if (r.ambiguity > o.max_ambiguity) {
+    r.status = LStatus::kAmbiguous;
+    r.detail = fmt::format("another pose {:.2f} m / {:.1f} deg away fits {:.0f} % as well", 
+                           (refined[1].pose.anchor - best.pose.anchor).norm(),
+                           yaw_difference(refined[1].pose.yaw, best.pose.yaw) * kRadToDeg, 100 * r.ambiguity);
+    return r;
+  }
+  r.status = LStatus::kOk;
+  r.detail = fmt::format("fitness {:.2f}, rmse {:.3f} m, ambiguity {:.2f}, sd {:.3f} m / {:.2f} deg", r.fitness,
+                         r.rmse_m, r.ambiguity, sigma_m, sigma_deg);
+  return r;
+}
+
+Result run(const Localiser::Impl& m, const Request& q) {
+  const LocaliserOptions& o = m.options;
+  if (std::string bad = check_request(q, o); !bad.empty()) return failure(LStatus::kBadRequest, bad);
+  const Prepared p = prepare(q, o);
+  if (static_cast<int>(p.coarse.size()) < 10) {
+    return failure(LStatus::kTooLittleStructure,
+                   fmt::format("the submap covers {} cells of {} m", p.coarse.size(), o.coarse_resolution_m));
+  }
+  auto region = search_region(m, q, p);
+  if (auto* fail = std::get_if<Result>(&region)) return *fail;
+  const Region& reg = std::get<Region>(region);
+  const double res = o.coarse_resolution_m;
+  const double extent_cells = (reg.anchors.sizes() / res).maxCoeff();
+  const int levels = std::clamp(1 + static_cast<int>(std::ceil(std::log2(std::max(extent_cells, 1.0)))), 1,
+                                o.branch_levels);
+  const LikelihoodPyramid grid = LikelihoodPyramid::build(m.coarse_points, reg.grid, res, levels, 1.0);
+  SearchWindow w;
+  w.anchor_min = grid.cell_of(reg.anchors.min());
+  w.anchor_max = grid.cell_of(reg.anchors.max());
+  w.radius_m = reg.radius_m;
+  w.centre = reg.centre;
+  w.yaw_step_rad = o.yaw_step_deg > 0
+                       ? o.yaw_step_deg * kDegToRad
+                       : std::clamp(std::acos(1.0 - 0.5 * res * res / std::max(p.reach_m * p.reach_m, res * res)),
+                                    0.2 * kDegToRad, 10.0 * kDegToRad);
+  SearchOptions so;
+  so.max_hypotheses = o.hypotheses;
+  so.min_score = o.coarse_min_score;
+  so.distinct_m = o.distinct_m;
+  so.distinct_rad = o.distinct_deg * kDegToRad;
+  const std::vector<Hypothesis> coarse = correlative_search(grid, p.coarse, w, so);
+  if (coarse.empty()) {
+    return failure(LStatus::kOutsideMap, fmt::format("no pose puts {:.0f} % of the submap near the map's surfaces",
+                                                     100 * o.coarse_min_score));
+  }
+  return verdict(m, q, p, refine_all(m, p, coarse, so));
+}
+
+}  // namespace
+
+StatusOr<Localiser> Localiser::create(std::shared_ptr<const map::VoxelMap> map, const LocaliserOptions& o) {
+  MRVS_RETURN_IF_ERROR(config::validate_options(o));
+  if (!map || map->levels.empty() || map->point_count() == 0) {
+    return absl::FailedPreconditionError("localisation: the map has no points");
+  }
+  const int fine = map->level_of(o.fine_resolution_m);
+  if (fine < 0) {
+    return absl::InvalidArgumentError(
+        fmt::format("localise.fine_resolution_m {} is not a level of the map (levels: {} m)", o.fine_resolution_m,
+                    fmt::join(map->resolutions(), ", ")));
+  }
+  const auto t0 = Clock::now();
+  auto impl = std::make_shared<Impl>();
+  impl->map = map;
+  impl->options = o;
+  for (const map::MapPoint& p : map->levels.back().points) {
+    impl->coarse_points.push_back(p.position);
+    impl->bounds.extend(p.position.cast<double>());
+  }
+  std::vector<Eigen::Vector3f> fine_points;
+  fine_points.reserve(map->levels[static_cast<std::size_t>(fine)].points.size());
+  for (const map::MapPoint& p : map->levels[static_cast<std::size_t>(fine)].points) fine_points.push_back(p.position);
+  impl->surface = MapSurface::build(std::move(fine_points), o.normal_knn, o.normal_max_rms_m);
+  impl->setup_s = ms_since(t0) * 1e-3;
+  Localiser l;
+  l.impl_ = std::move(impl);
+  return l;
+}
+
+localisation::Result Localiser::localise(const Request& request) const {
+  const auto t0 = Clock::now();
+  Result r = run(*impl_, request);
+  r.time_ms = ms_since(t0);
+  return r;
+}
+
+const LocaliserOptions& Localiser::options() const { return impl_->options; }
+double Localiser::setup_s() const { return impl_->setup_s; }
+
+}  // namespace mrvs::localise

@@ -1,0 +1,91 @@
+#include "point_to_plane.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+namespace mrvs::localise {
+namespace {
+
+using Row4 = Eigen::Matrix<double, 1, 4>;
+
+/// Directions with less than this share of the strongest one's information are not moved along.
+constexpr double kDegenerate = 1e-4;
+
+struct Linearised {
+  Eigen::Matrix4d H = Eigen::Matrix4d::Zero();  ///< weighted
+  Eigen::Vector4d b = Eigen::Vector4d::Zero();
+  Eigen::Matrix4d information = Eigen::Matrix4d::Zero();  ///< unweighted, inliers only
+  double sum_r2 = 0.0;
+  int used = 0;         ///< residuals in H
+  int with_normal = 0;  ///< inliers with a normal
+  int inliers = 0;
+};
+
+Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points, double yaw,
+                     const Eigen::Vector3d& anchor, double max_distance, const FineOptions& o) {
+  Linearised L;
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  for (const Eigen::Vector3d& p : points) {
+    const Eigen::Vector3d x = R * p + anchor;
+    const auto nb = surface.nearest(x.cast<float>(), static_cast<float>(max_distance));
+    if (!nb) continue;
+    const bool inlier = nb->distance_m <= o.inlier_m;
+    L.inliers += inlier;
+    const Eigen::Vector3d n = surface.normal(nb->index).cast<double>();
+    if (n.squaredNorm() < 0.5) continue;
+    const double r = n.dot(x - surface.point(nb->index).cast<double>());
+    Row4 J;
+    J.head<3>() = n.transpose();
+    J(3) = n.dot(Eigen::Vector3d::UnitZ().cross(x - anchor));
+    const double w = std::abs(r) <= o.huber_m ? 1.0 : o.huber_m / std::abs(r);
+    L.H.noalias() += w * J.transpose() * J;
+    L.b.noalias() += w * J.transpose() * r;
+    ++L.used;
+    if (!inlier) continue;
+    L.information.noalias() += J.transpose() * J;
+    L.sum_r2 += r * r;
+    ++L.with_normal;
+  }
+  return L;
+}
+
+}  // namespace
+
+FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points, double yaw,
+                       const Eigen::Vector3d& anchor, const FineOptions& o) {
+  FineResult out;
+  out.yaw = yaw;
+  out.anchor = anchor;
+  const int n = std::max(1, o.iterations);
+  for (int it = 0; it < n; ++it) {
+    const double s = n > 1 ? std::min(1.0, static_cast<double>(it) / (0.7 * (n - 1))) : 1.0;
+    const double dist = o.start_distance_m + s * (o.end_distance_m - o.start_distance_m);
+    const Linearised L = linearise(surface, points, out.yaw, out.anchor, dist, o);
+    if (L.used < 4) break;
+    // No step along directions the submap does not constrain (a wall leaves two free): they
+    // keep the start's value (solution remapping, Zhang et al., ICRA 2016).
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(L.H);
+    const Eigen::Vector4d lambda = eig.eigenvalues();
+    Eigen::Vector4d dx = Eigen::Vector4d::Zero();
+    for (int k = 0; k < 4; ++k) {
+      if (lambda(k) <= kDegenerate * lambda(3)) continue;
+      const Eigen::Vector4d v = eig.eigenvectors().col(k);
+      dx -= v * (v.dot(L.b) / lambda(k));
+    }
+    if (!dx.allFinite()) break;
+    out.anchor += dx.head<3>();
+    out.yaw += dx(3);
+    out.iterations = it + 1;
+    if (s >= 1.0 && dx.head<3>().norm() < 1e-5 && std::abs(dx(3)) < 1e-6) break;
+  }
+  const Linearised L = linearise(surface, points, out.yaw, out.anchor, o.end_distance_m, o);
+  out.information = L.information;
+  out.inliers = L.inliers;
+  out.fitness = points.empty() ? 0.0 : static_cast<double>(L.inliers) / static_cast<double>(points.size());
+  out.rmse_m = L.with_normal > 0 ? std::sqrt(L.sum_r2 / L.with_normal) : 0.0;
+  return out;
+}
+
+}  // namespace mrvs::localise

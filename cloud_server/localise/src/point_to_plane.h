@@ -1,0 +1,47 @@
+#pragma once
+// The fine stage: 4-DoF point-to-plane ICP (x, y, z, yaw; gravity known, so roll and pitch
+// stay the edge's) of the submap against a MapSurface, by Gauss-Newton with Huber weights and
+// a shrinking correspondence distance. PCL's ICP variants estimate 6 DoF (its rigid warps are
+// 6-D or planar 3-D), which would let the map's local tilt fight the IMU's gravity; this one
+// also returns the information matrix the answer's covariance comes from.
+//
+// Pose: a submap point p (gravity-aligned, relative to the anchor) lies at
+//   x = R_z(yaw) p + anchor   (map-local),
+// and the error [d_anchor (3); d_yaw] perturbs it as x + d_anchor + d_yaw z x (x - anchor).
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "map_surface.h"
+
+namespace mrvs::localise {
+
+struct FineOptions {
+  int iterations = 20;
+  double start_distance_m = 0.3;  ///< correspondence distance of the first iteration
+  double end_distance_m = 0.1;    ///< ... shrinking linearly to this by the last ones
+  double huber_m = 0.03;          ///< residuals beyond are down-weighted
+  double inlier_m = 0.05;         ///< a point this close to the map counts towards the fitness
+};
+
+struct FineResult {
+  double yaw = 0.0;
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
+  double fitness = 0.0;  ///< share of the points within inlier_m of a map point
+  double rmse_m = 0.0;   ///< point-to-plane rms of the inliers with a normal
+  /// sum of J^T J over the inliers with a normal (unit weights), order [anchor; yaw]
+  Eigen::Matrix4d information = Eigen::Matrix4d::Zero();
+  int inliers = 0;
+  int iterations = 0;
+};
+
+/// Refines (yaw, anchor) from the given start.
+FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points, double yaw,
+                       const Eigen::Vector3d& anchor, const FineOptions& options);
+
+/// The map-local position of point p at (yaw, anchor).
+inline Eigen::Vector3d place(const Eigen::Vector3d& p, double yaw, const Eigen::Vector3d& anchor) {
+  return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * p + anchor;
+}
+
+}  // namespace mrvs::localise

@@ -1,0 +1,149 @@
+#pragma once
+// The edge's side of map-based localisation (design/localisation.md; decision 7): until the
+// odometry frame o is tied to the map frame m, the filter runs as plain VIO and this class
+// gathers a submap in o (the triangulated feature tracks, or dense stereo), asks the cloud
+// where it lies in the map, and decides which answer to trust:
+//   - an answer must be "ok" with an ambiguity at most max_ambiguity;
+//   - answers_needed answers from different submaps must agree (their T_m_o, within their
+//     covariances plus a floor) before the newest is used: one wrong lock from a
+//     self-similar place is not enough;
+//   - a refused or disagreeing answer makes the next submap longer (up to max_window_s);
+//   - a request unanswered after timeout_s (wall clock) is given up and asked again.
+// Timing in the sensor clock (frame times) except the reply timeout (steady clock).
+#include <chrono>
+#include <deque>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "mrvs/config/options.h"
+#include "mrvs/edge/feature_observation.h"
+#include "mrvs/edge/map_service.h"
+#include "mrvs/localisation/types.h"
+
+namespace mrvs::edge {
+
+struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
+  std::string submap_source = "tracks";  ///< tracks | dense_stereo
+  double first_request_s = 1.0;          ///< after initialisation, s
+  double window_s = 1.5;                 ///< the submap holds the points of this long, s
+  double max_window_s = 6.0;             ///< ... growing to this after refusals, s
+  double interval_s = 1.0;               ///< between requests (after the last reply), s
+  double timeout_s = 3.0;                ///< a request unanswered this long (wall clock) is asked again, s
+  double max_range_m = 8.0;              ///< submap points farther from the anchor are left out, m
+  double voxel_m = 0.04;                 ///< one submap point per cell of this size, m
+  int max_points = 6000;                 ///< submap points sent at most (<= 10000, 6 B each)
+  int min_points = 150;                  ///< fewer: wait for more
+  double quantum_m = 0.005;              ///< wire quantisation of the points, m
+  double max_ambiguity = 0.8;            ///< answers more ambiguous are refused
+  int answers_needed = 2;                ///< agreeing answers before one is used
+  double agree_floor_m = 0.05;           ///< agreement: covariance plus this, m
+  double agree_floor_deg = 0.5;          ///< ... and this, deg
+  double dense_interval_s = 0.25;        ///< dense_stereo: one stereo pair per this, s
+  double gnss_sigmas = 3.0;              ///< prior region: this many GNSS sigmas ...
+  double gnss_margin_m = 2.0;            ///< ... plus the antenna lever arm plus this, m
+
+  template <class V>
+  void visit(V& v) {
+    using namespace mrvs::config::constraints;
+    v("submap_source", submap_source, one_of({"tracks", "dense_stereo"}), "submap points: tracks | dense_stereo");
+    v("first_request_s", first_request_s, in_range(0.0, 600.0), "first request after initialisation, s");
+    v("window_s", window_s, in_range(0.1, 600.0), "submap time span, s");
+    v("max_window_s", max_window_s, in_range(0.1, 600.0), "longest submap time span, s");
+    v("interval_s", interval_s, in_range(0.0, 600.0), "between requests, s");
+    v("timeout_s", timeout_s, in_range(0.01, 600.0), "unanswered request timeout (wall clock), s");
+    v("max_range_m", max_range_m, in_range(0.1, 10000.0), "submap radius around the anchor, m");
+    v("voxel_m", voxel_m, in_range(0.001, 100.0), "submap thinning cell, m");
+    v("max_points", max_points, in_range(10, 10000), "submap points sent at most");
+    v("min_points", min_points, in_range(10, 10000), "submap points needed to ask");
+    v("quantum_m", quantum_m, in_range(0.0001, 1.0), "wire quantisation of the points, m");
+    v("max_ambiguity", max_ambiguity, in_range(0.0, 1.0), "most ambiguous answer accepted");
+    v("answers_needed", answers_needed, in_range(1, 10), "agreeing answers before one is used");
+    v("agree_floor_m", agree_floor_m, in_range(0.0, 100.0), "agreement floor, m");
+    v("agree_floor_deg", agree_floor_deg, in_range(0.0, 180.0), "agreement floor, deg");
+    v("dense_interval_s", dense_interval_s, in_range(0.01, 100.0), "dense stereo: time between pairs, s");
+    v("gnss_sigmas", gnss_sigmas, in_range(0.0, 100.0), "prior radius in GNSS sigmas");
+    v("gnss_margin_m", gnss_margin_m, in_range(0.0, 10000.0), "prior radius margin, m");
+  }
+};
+
+/// An accepted answer: the odometry frame in the map.
+struct Alignment {
+  SE3d T_m_o;
+  Mat6d covariance = Mat6d::Zero();   ///< [rho; phi] about anchor_m (mrvs/localisation/types.h)
+  Vec3d anchor_m = Vec3d::Zero();
+  TimestampNs t_ns = 0;               ///< anchor time of the submap
+  double fitness = 0.0;
+  double ambiguity = 0.0;
+};
+
+/// What localisation did in one frame.
+struct LocalisationFrameStats {
+  int requests = 0;
+  std::size_t bytes_up = 0;
+  int replies = 0;
+  std::size_t bytes_down = 0;
+  int submap_points = 0;  ///< of the request sent this frame
+  double rtt_ms = 0.0;    ///< of the reply taken this frame
+  double cloud_ms = 0.0;  ///< the cloud's registration time of that reply
+  int timeouts = 0;
+  std::string reply;      ///< "<status>: <detail>" of the reply taken, if any
+  bool accepted = false;
+};
+
+class MapLocaliser {
+ public:
+  explicit MapLocaliser(const LocalisationOptions& options);
+
+  /// Forgets the submap, the candidates and the request in flight (a filter restart: a new
+  /// odometry frame).
+  void reset();
+  /// Points seen at t_ns (odometry frame), e.g. one dense stereo pair.
+  void add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o);
+  /// A feature's latest position estimate (odometry frame) at t_ns; replaces its earlier one.
+  void set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o);
+  /// Whether a dense stereo pair at t_ns is wanted (dense_stereo source, dense_interval_s).
+  bool wants_dense(TimestampNs t_ns) const;
+
+  /// One frame: takes replies, decides, maybe sends the next request (anchored at the IMU
+  /// position anchor_o at t_ns, with the prior region if any). The accepted alignment, once.
+  std::optional<Alignment> step(TimestampNs t_ns, const Vec3d& anchor_o,
+                                const std::optional<localisation::PriorRegion>& prior, MapService& service,
+                                LocalisationFrameStats* stats);
+
+  /// The submap request it would send now (for tests and diagnostics); nullopt with too few points.
+  std::optional<localisation::Request> build_request(TimestampNs t_ns, const Vec3d& anchor_o) const;
+  /// The last decision in words ("waiting for 2 agreeing answers (1 so far)", ...).
+  const std::string& status() const { return status_; }
+  /// Requests sent since the last reset.
+  int requests() const { return requests_; }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  struct Pending {
+    std::uint64_t seq = 0;
+    TimestampNs t_ns = 0;
+    Vec3d anchor_o = Vec3d::Zero();
+    Clock::time_point sent;
+  };
+  std::optional<Alignment> handle(const LocalisationReply& reply, LocalisationFrameStats* stats);
+  bool agree(const Alignment& earlier, const Alignment& later) const;
+  void refuse(const std::string& why);
+  void forget_before(TimestampNs t_ns);
+
+  LocalisationOptions options_;
+  std::deque<std::pair<TimestampNs, std::vector<Vec3d>>> dense_;
+  std::map<FeatureId, std::pair<TimestampNs, Vec3d>> tracks_;
+  std::optional<Pending> pending_;
+  std::vector<Alignment> candidates_;  ///< agreeing answers so far
+  std::optional<TimestampNs> first_ns_;
+  TimestampNs next_request_ns_ = 0;
+  TimestampNs last_dense_ns_ = 0;
+  double window_s_;
+  std::uint64_t next_seq_ = 1;
+  int requests_ = 0;
+  std::string status_ = "not started";
+};
+
+}  // namespace mrvs::edge

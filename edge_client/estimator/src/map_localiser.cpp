@@ -1,0 +1,216 @@
+#include "mrvs/edge/map_localiser.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <Eigen/Cholesky>
+
+#include "mrvs/core/hash.h"
+#include "mrvs/edge/global_alignment.h"
+#include "mrvs/geometry/angles.h"
+
+namespace mrvs::edge {
+namespace {
+
+using localisation::Status;
+
+/// 99 % quantile of chi-square with 4 degrees of freedom.
+constexpr double kChi2Agree4 = 13.277;
+
+std::uint64_t cell_key(const Vec3d& p, double cell) {
+  const Eigen::Vector3i c = (p / cell).array().floor().cast<int>();
+  return mix64((static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 42) ^
+               (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y())) << 21) ^
+               static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z())));
+}
+
+/// [position; yaw] covariance of `a` moved from its anchor to the map point x_m.
+Eigen::Matrix4d covariance_at(const Alignment& a, const Vec3d& x_m) {
+  Eigen::Matrix4d S;
+  const int idx[4] = {0, 1, 2, 5};
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) S(i, j) = a.covariance(idx[i], idx[j]);
+  }
+  Eigen::Matrix4d G = Eigen::Matrix4d::Identity();
+  G.block<3, 1>(0, 3) = Vec3d::UnitZ().cross(x_m - a.anchor_m);
+  return G * S * G.transpose();
+}
+
+}  // namespace
+
+MapLocaliser::MapLocaliser(const LocalisationOptions& options) : options_(options), window_s_(options.window_s) {}
+
+void MapLocaliser::reset() {
+  dense_.clear();
+  tracks_.clear();
+  pending_.reset();
+  candidates_.clear();
+  first_ns_.reset();
+  next_request_ns_ = 0;
+  last_dense_ns_ = 0;
+  window_s_ = options_.window_s;
+  requests_ = 0;
+  status_ = "restarted";
+}
+
+void MapLocaliser::add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o) {
+  if (!points_o.empty()) dense_.emplace_back(t_ns, points_o);
+  last_dense_ns_ = t_ns;
+}
+
+void MapLocaliser::set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o) { tracks_[id] = {t_ns, p_o}; }
+
+bool MapLocaliser::wants_dense(TimestampNs t_ns) const {
+  return options_.submap_source == "dense_stereo" &&
+         (last_dense_ns_ == 0 || t_ns - last_dense_ns_ >= from_seconds(options_.dense_interval_s));
+}
+
+void MapLocaliser::forget_before(TimestampNs t_ns) {
+  while (!dense_.empty() && dense_.front().first < t_ns) dense_.pop_front();
+  for (auto it = tracks_.begin(); it != tracks_.end();) it = it->second.first < t_ns ? tracks_.erase(it) : ++it;
+}
+
+std::optional<localisation::Request> MapLocaliser::build_request(TimestampNs t_ns, const Vec3d& anchor_o) const {
+  const TimestampNs from = t_ns - from_seconds(window_s_);
+  std::unordered_map<std::uint64_t, std::pair<Vec3d, int>> cells;
+  std::vector<std::uint64_t> order;
+  auto add = [&](const Vec3d& p) {
+    if (!p.allFinite() || (p - anchor_o).norm() > options_.max_range_m) return;
+    auto [it, fresh] = cells.try_emplace(cell_key(p, options_.voxel_m), Vec3d::Zero(), 0);
+    if (fresh) order.push_back(it->first);
+    it->second.first += p;
+    ++it->second.second;
+  };
+  for (const auto& [t, pts] : dense_) {
+    if (t < from) continue;
+    for (const Vec3d& p : pts) add(p);
+  }
+  for (const auto& [id, tp] : tracks_) {
+    if (tp.first >= from) add(tp.second);
+  }
+  if (static_cast<int>(order.size()) < options_.min_points) return std::nullopt;
+  localisation::Request q;
+  q.stamp_ns = t_ns;
+  q.anchor_o = anchor_o;
+  q.gravity_o = Vec3d(0, 0, -1);  // the filter's world frame is gravity-aligned
+  const std::size_t n = order.size();
+  const std::size_t m = std::min<std::size_t>(n, static_cast<std::size_t>(options_.max_points));
+  q.points.reserve(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    const auto& [sum, count] = cells.at(order[i * n / m]);
+    q.points.push_back((sum / count - anchor_o).cast<float>());
+  }
+  return q;
+}
+
+std::optional<Alignment> MapLocaliser::step(TimestampNs t_ns, const Vec3d& anchor_o,
+                                            const std::optional<localisation::PriorRegion>& prior,
+                                            MapService& service, LocalisationFrameStats* stats) {
+  if (!first_ns_) {
+    first_ns_ = t_ns;
+    next_request_ns_ = t_ns + from_seconds(options_.first_request_s);
+  }
+  forget_before(t_ns - from_seconds(options_.max_window_s));
+  for (const LocalisationReply& reply : service.poll_localisation()) {
+    if (!pending_ || reply.seq != pending_->seq) continue;  // stale (a request given up on, or before a restart)
+    if (auto accepted = handle(reply, stats)) return accepted;
+  }
+  if (pending_ && Clock::now() - pending_->sent > std::chrono::duration<double>(options_.timeout_s)) {
+    ++stats->timeouts;
+    status_ = fmt::format("no localisation reply to request {} after {:.1f} s: asking again", pending_->seq,
+                          options_.timeout_s);
+    spdlog::warn("{}", status_);
+    pending_.reset();
+  }
+  if (pending_ || t_ns < next_request_ns_) return std::nullopt;
+  if (!service.offers_localisation()) {
+    status_ = "waiting for the cloud's localisation service";
+    return std::nullopt;
+  }
+  std::optional<localisation::Request> q = build_request(t_ns, anchor_o);
+  if (!q) {
+    status_ = fmt::format("gathering the submap (fewer than {} points)", options_.min_points);
+    return std::nullopt;
+  }
+  q->seq = next_seq_++;
+  q->prior = prior;
+  auto sent = service.send_localisation(*q, static_cast<float>(options_.quantum_m));
+  next_request_ns_ = t_ns + from_seconds(options_.interval_s);
+  if (!sent.ok()) {
+    status_ = fmt::format("localisation request not sent: {}", std::string(sent.status().message()));
+    return std::nullopt;
+  }
+  pending_ = Pending{q->seq, t_ns, anchor_o, Clock::now()};
+  ++requests_;
+  ++stats->requests;
+  stats->bytes_up += *sent;
+  stats->submap_points = static_cast<int>(q->points.size());
+  status_ = fmt::format("localisation request {} sent ({} points, {:.1f} s of data, {} B)", q->seq,
+                        q->points.size(), window_s_, *sent);
+  return std::nullopt;
+}
+
+void MapLocaliser::refuse(const std::string& why) {
+  window_s_ = std::min(options_.max_window_s, 1.5 * window_s_);
+  status_ = why + fmt::format("; asking again with {:.1f} s of data", window_s_);
+  spdlog::info("localisation: {}", status_);
+}
+
+std::optional<Alignment> MapLocaliser::handle(const LocalisationReply& reply, LocalisationFrameStats* stats) {
+  const localisation::Result& r = reply.result;
+  const Pending p = *pending_;
+  pending_.reset();
+  ++stats->replies;
+  stats->bytes_down += reply.bytes_down;
+  stats->rtt_ms = 1e-6 * static_cast<double>(reply.rtt_ns);
+  stats->cloud_ms = r.time_ms;
+  stats->reply = fmt::format("{}: {}", localisation::status_name(r.status), r.detail);
+  if (r.status != Status::kOk) {
+    refuse(fmt::format("the cloud answered request {} '{}' ({})", p.seq, localisation::status_name(r.status), r.detail));
+    return std::nullopt;
+  }
+  if (r.ambiguity > options_.max_ambiguity) {
+    refuse(fmt::format("answer {} is ambiguous ({:.2f} > {:.2f})", p.seq, r.ambiguity, options_.max_ambiguity));
+    return std::nullopt;
+  }
+  Alignment a{r.T_m_o, r.covariance, r.T_m_o * p.anchor_o, p.t_ns, r.fitness, r.ambiguity};
+  if (!candidates_.empty() && !agree(candidates_.back(), a)) {
+    candidates_.clear();
+    refuse(fmt::format("answer {} disagrees with the previous one", p.seq));
+    candidates_.push_back(a);  // it may be the right one: the next answer decides
+    return std::nullopt;
+  }
+  candidates_.push_back(a);
+  if (static_cast<int>(candidates_.size()) < options_.answers_needed) {
+    status_ = fmt::format("answer {} ok (fitness {:.2f}, ambiguity {:.2f}); waiting for {} agreeing answers", p.seq,
+                          r.fitness, r.ambiguity, options_.answers_needed);
+    spdlog::info("localisation: {}", status_);
+    return std::nullopt;
+  }
+  stats->accepted = true;
+  status_ = fmt::format("localised by answer {} ({} agreeing; fitness {:.2f}, ambiguity {:.2f})", p.seq,
+                        candidates_.size(), r.fitness, r.ambiguity);
+  return a;
+}
+
+bool MapLocaliser::agree(const Alignment& earlier, const Alignment& later) const {
+  // Both place the later anchor (an odometry-frame point) in the map; VIO drift between the
+  // two submaps is within the floors.
+  const Vec3d x_later = later.anchor_m;
+  const Vec3d x_earlier = earlier.T_m_o * (later.T_m_o.inverse() * later.anchor_m);
+  Eigen::Vector4d d;
+  d.head<3>() = x_earlier - x_later;
+  d(3) = std::remainder(yaw_of(earlier.T_m_o) - yaw_of(later.T_m_o), 2.0 * kPi);
+  Eigen::Matrix4d S = covariance_at(earlier, x_earlier) + covariance_at(later, x_later);
+  S.diagonal().head<3>().array() += options_.agree_floor_m * options_.agree_floor_m;
+  S(3, 3) += std::pow(options_.agree_floor_deg * kDegToRad, 2);
+  const double m2 = d.dot(S.ldlt().solve(d));
+  spdlog::debug("localisation agreement: {:.3f} m, {:.2f} deg, Mahalanobis^2 {:.1f}", d.head<3>().norm(),
+                d(3) * kRadToDeg, m2);
+  return std::isfinite(m2) && m2 <= kChi2Agree4;
+}
+
+}  // namespace mrvs::edge
