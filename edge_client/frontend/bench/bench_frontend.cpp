@@ -8,11 +8,16 @@
 //   BM_GradientPyramid      3-level float pyramid + gradients of one image
 //   BM_SelectPixels/H       the DSO-style selector asked for 200 pixels on an empty mask,
 //                           starting from cell size H (0: the first frame's 3 px)
+//   BM_DenseStereoPoints/S  DenseStereo::points of one pair of the same sequence (replayed) with
+//                           downsample S (1, 2, 4); counters: median / p95 ms per pair,
+//                           median points per pair
 // The tracker runs with the `tracker` section of MRVS_BENCH_CONFIG (default config/euroc.yaml,
-// the options the edge client ships with), plus the overrides in MRVS_BENCH_SET
-// (space-separated, e.g. "tracker.klt_iterations=15 tracker.klt_window=9").
+// the options the edge client ships with), dense stereo with its `dense_stereo` section (the
+// defaults when there is none), plus the overrides in MRVS_BENCH_SET (space-separated, e.g.
+// "tracker.klt_iterations=15 tracker.klt_window=9" or "dense_stereo.matcher=sgbm").
 // Environment: MRVS_BENCH_PRESET (easy | realistic, default easy), MRVS_BENCH_CONFIG, MRVS_BENCH_SET.
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <memory>
 #include <sstream>
@@ -24,6 +29,7 @@
 
 #include "mrvs/config/options.h"
 #include "mrvs/core/stats.h"
+#include "mrvs/edge/dense_stereo.h"
 #include "mrvs/edge/feature_tracker.h"
 #include "mrvs/edge/pixel_selector.h"
 #include "mrvs/sim/generator.h"
@@ -38,6 +44,7 @@ using namespace mrvs;
 struct Bench {
   std::string error;
   edge::TrackerOptions tracker;
+  edge::DenseStereoOptions dense_stereo;
   config::StereoRigCalibration rig;
   std::vector<std::array<cv::Mat, 2>> images;
   std::vector<TimestampNs> t_ns;
@@ -50,22 +57,27 @@ Bench failed(std::string error) {
   return b;
 }
 
-StatusOr<edge::TrackerOptions> tracker_options() {
+/// Section `section` of MRVS_BENCH_CONFIG with the overrides of MRVS_BENCH_SET.
+template <class T>
+StatusOr<T> bench_options(const std::string& section) {
   const char* file = std::getenv("MRVS_BENCH_CONFIG");
   const char* set = std::getenv("MRVS_BENCH_SET");
   std::vector<std::string> overrides;
   std::istringstream words(set != nullptr ? set : "");
   for (std::string w; words >> w;) overrides.push_back(w);
-  return config::load_options_file<edge::TrackerOptions>(
-      file != nullptr ? std::string(file) : std::string(MRVS_SOURCE_DIR "/config/euroc.yaml"), "tracker",
+  return config::load_options_file<T>(
+      file != nullptr ? std::string(file) : std::string(MRVS_SOURCE_DIR "/config/euroc.yaml"), section,
       overrides);
 }
 
 Bench build_bench() {
   Bench b;
-  StatusOr<edge::TrackerOptions> tracker = tracker_options();
+  StatusOr<edge::TrackerOptions> tracker = bench_options<edge::TrackerOptions>("tracker");
   if (!tracker.ok()) return failed(std::string(tracker.status().message()));
   b.tracker = *tracker;
+  StatusOr<edge::DenseStereoOptions> dense = bench_options<edge::DenseStereoOptions>("dense_stereo");
+  if (!dense.ok()) return failed(std::string(dense.status().message()));
+  b.dense_stereo = *dense;
   sim::GeneratorRequest r;
   r.profile = sim::SceneProfile::kIndoor;
   r.trajectory = test::euroc_groundtruth_file("V1_01_easy.txt");
@@ -157,9 +169,33 @@ void BM_SelectPixels(benchmark::State& state) {
   state.counters["selected"] = static_cast<double>(selected);
 }
 
+/// state.range(0): DenseStereoOptions::downsample.
+void BM_DenseStereoPoints(benchmark::State& state) {
+  const Bench& b = bench();
+  if (!b.error.empty()) return state.SkipWithError(b.error.c_str());
+  edge::DenseStereoOptions options = b.dense_stereo;
+  options.downsample = static_cast<int>(state.range(0));
+  auto stereo = edge::DenseStereo::create(options, b.rig);
+  if (!stereo.ok()) return state.SkipWithError(std::string(stereo.status().message()).c_str());
+  std::vector<double> ms, points;
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto p = stereo->points(b.images[k][0], b.images[k][1]);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    if (!p.ok()) return state.SkipWithError(std::string(p.status().message()).c_str());
+    points.push_back(static_cast<double>(p->size()));
+    k = (k + 1) % b.images.size();
+  }
+  state.counters["pair_ms_p50"] = quantile(ms, 0.5);
+  state.counters["pair_ms_p95"] = quantile(ms, 0.95);
+  state.counters["points_p50"] = quantile(points, 0.5);
+}
+
 BENCHMARK(BM_FrontendStereoFrame)->Arg(0)->Arg(1)->Iterations(600)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GradientPyramid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SelectPixels)->Arg(0)->Arg(35)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DenseStereoPoints)->Arg(1)->Arg(2)->Arg(4)->Iterations(120)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
