@@ -5,6 +5,8 @@
 #include <cmath>
 #include <unordered_map>
 #include <variant>
+#include <cstdio>
+#include <cstdlib>
 
 #include <fmt/format.h>
 #include <Eigen/Eigenvalues>
@@ -181,6 +183,7 @@ std::vector<Refined> refine_all(const Localiser::Impl& m, const Prepared& p, con
   fo.end_distance_m = o.fine_end_distance_m;
   fo.huber_m = o.huber_m;
   fo.inlier_m = o.inlier_m;
+  fo.voxel_m = o.fine_resolution_m;
   std::vector<Refined> out;
   for (const Hypothesis& h : coarse) {
     Refined r;
@@ -189,11 +192,14 @@ std::vector<Refined> refine_all(const Localiser::Impl& m, const Prepared& p, con
     const auto same = std::find_if(out.begin(), out.end(), [&](const Refined& x) { return same_pose(x.pose, r.pose, so); });
     if (same == out.end()) {
       out.push_back(r);
-    } else if (r.fine.fitness > same->fine.fitness) {
+    } else if (r.fine.structure > same->fine.structure) {
       *same = r;
     }
   }
-  std::sort(out.begin(), out.end(), [](const Refined& a, const Refined& b) { return a.fine.fitness > b.fine.fitness; });
+  // Ranked by what tells placements apart: the inliers on vertical surfaces (a floor fits
+  // anywhere at the right height).
+  std::sort(out.begin(), out.end(),
+            [](const Refined& a, const Refined& b) { return a.fine.structure > b.fine.structure; });
   return out;
 }
 
@@ -219,7 +225,8 @@ Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p, co
   r.hypotheses = static_cast<int>(refined.size());
   r.fitness = best.fine.fitness;
   r.rmse_m = best.fine.rmse_m;
-  r.ambiguity = refined.size() > 1 && best.fine.fitness > 0 ? refined[1].fine.fitness / best.fine.fitness : 0.0;
+  r.ambiguity =
+      refined.size() > 1 && best.fine.structure > 0 ? refined[1].fine.structure / best.fine.structure : 0.0;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(best.pose.yaw, Eigen::Vector3d::UnitZ()) * p.R_g;
   const Eigen::Vector3d anchor_m = best.pose.anchor + m.map->origin;
   r.T_m_o = SE3d(Quatd(R).normalized(), anchor_m - R * q.anchor_o);
@@ -287,7 +294,16 @@ Result run(const Localiser::Impl& m, const Request& q) {
     return failure(LStatus::kOutsideMap, fmt::format("no pose puts {:.0f} % of the submap near the map's surfaces",
                                                      100 * o.coarse_min_score));
   }
-  return verdict(m, q, p, refine_all(m, p, coarse, so));
+  auto ref = refine_all(m, p, coarse, so);
+  if (getenv("LOCDBG")) {
+    static int cnt = 0; ++cnt;
+    FILE* f = fopen(fmt::format("/tmp/loc/dbg_{}.txt", cnt).c_str(), "w");
+    for (auto& h : coarse) fprintf(f, "C %.4f %.3f %.3f %.3f %.3f\n", h.yaw, h.anchor.x(), h.anchor.y(), h.anchor.z(), h.score);
+    for (auto& h : ref) fprintf(f, "F %.4f %.3f %.3f %.3f %.3f %.3f\n", h.pose.yaw, h.pose.anchor.x(), h.pose.anchor.y(), h.pose.anchor.z(), h.fine.fitness, h.fine.structure);
+    for (auto& x : p.fine) fprintf(f, "P %.3f %.3f %.3f\n", x.x(), x.y(), x.z());
+    fclose(f);
+  }
+  return verdict(m, q, p, ref);
 }
 
 }  // namespace

@@ -18,24 +18,27 @@ struct Linearised {
   Eigen::Vector4d b = Eigen::Vector4d::Zero();
   Eigen::Matrix4d information = Eigen::Matrix4d::Zero();  ///< unweighted, inliers only
   double sum_r2 = 0.0;
-  int used = 0;         ///< residuals in H
-  int with_normal = 0;  ///< inliers with a normal
+  double structure = 0.0;  ///< sum of |n_xy| over the inliers with a normal
+  int used = 0;            ///< residuals in H
+  int with_normal = 0;     ///< inliers with a normal
   int inliers = 0;
 };
 
 Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points, double yaw,
                      const Eigen::Vector3d& anchor, double max_distance, const FineOptions& o) {
   Linearised L;
+  const double reach = o.inlier_m + o.voxel_m;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   for (const Eigen::Vector3d& p : points) {
     const Eigen::Vector3d x = R * p + anchor;
-    const auto nb = surface.nearest(x.cast<float>(), static_cast<float>(max_distance));
+    const auto nb = surface.nearest(x.cast<float>(), static_cast<float>(std::max(max_distance, reach)));
     if (!nb) continue;
-    const bool inlier = nb->distance_m <= o.inlier_m;
-    L.inliers += inlier;
     const Eigen::Vector3d n = surface.normal(nb->index).cast<double>();
-    if (n.squaredNorm() < 0.5) continue;
-    const double r = n.dot(x - surface.point(nb->index).cast<double>());
+    const bool planar = n.squaredNorm() > 0.5;
+    const double r = planar ? n.dot(x - surface.point(nb->index).cast<double>()) : 0.0;
+    const bool inlier = planar ? nb->distance_m <= reach && std::abs(r) <= o.inlier_m : nb->distance_m <= o.inlier_m;
+    L.inliers += inlier;
+    if (!planar || nb->distance_m > max_distance) continue;
     Row4 J;
     J.head<3>() = n.transpose();
     J(3) = n.dot(Eigen::Vector3d::UnitZ().cross(x - anchor));
@@ -46,6 +49,7 @@ Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3
     if (!inlier) continue;
     L.information.noalias() += J.transpose() * J;
     L.sum_r2 += r * r;
+    L.structure += n.head<2>().norm();
     ++L.with_normal;
   }
   return L;
@@ -84,6 +88,7 @@ FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vecto
   out.information = L.information;
   out.inliers = L.inliers;
   out.fitness = points.empty() ? 0.0 : static_cast<double>(L.inliers) / static_cast<double>(points.size());
+  out.structure = points.empty() ? 0.0 : L.structure / static_cast<double>(points.size());
   out.rmse_m = L.with_normal > 0 ? std::sqrt(L.sum_r2 / L.with_normal) : 0.0;
   return out;
 }

@@ -21,13 +21,20 @@ struct FineOptions {
   double start_distance_m = 0.3;  ///< correspondence distance of the first iteration
   double end_distance_m = 0.1;    ///< ... shrinking linearly to this by the last ones
   double huber_m = 0.03;          ///< residuals beyond are down-weighted
-  double inlier_m = 0.05;         ///< a point this close to the map counts towards the fitness
+  double inlier_m = 0.05;         ///< a point this close to the map's surface is on it
+  double voxel_m = 0.03;          ///< the map level's voxel: its points are this sparse on a surface
 };
 
 struct FineResult {
   double yaw = 0.0;
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
-  double fitness = 0.0;  ///< share of the points within inlier_m of a map point
+  /// Share of the points on the map's surface: within inlier_m of the plane of their nearest
+  /// map point (within inlier_m of the point itself where the map has no plane there), that
+  /// point at most inlier_m + voxel_m away.
+  double fitness = 0.0;
+  /// The same count weighted by how much each inlier fixes the horizontal pose, |n_xy| of its
+  /// map normal (1 on walls, 0 on floors), per point: what tells two placements apart.
+  double structure = 0.0;
   double rmse_m = 0.0;   ///< point-to-plane rms of the inliers with a normal
   /// sum of J^T J over the inliers with a normal (unit weights), order [anchor; yaw]
   Eigen::Matrix4d information = Eigen::Matrix4d::Zero();

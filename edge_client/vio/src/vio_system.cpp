@@ -1,5 +1,9 @@
 #include "mrvs/edge/vio_system.h"
 
+#include <chrono>
+
+#include <spdlog/spdlog.h>
+
 namespace mrvs::edge {
 
 StatusOr<VioSystem> VioSystem::create(const EdgeOptions& options, const config::StereoRigCalibration& rig,
@@ -7,7 +11,11 @@ StatusOr<VioSystem> VioSystem::create(const EdgeOptions& options, const config::
   MRVS_ASSIGN_OR_RETURN(FeatureTracker tracker, FeatureTracker::create(options.tracker, rig));
   MRVS_ASSIGN_OR_RETURN(VioEstimator estimator,
                         VioEstimator::create(options.estimator, rig, std::move(groundtruth)));
-  return VioSystem(std::move(tracker), std::move(estimator));
+  std::optional<DenseStereo> dense;
+  if (options.estimator.localisation.submap_source == "dense_stereo") {
+    MRVS_ASSIGN_OR_RETURN(dense, DenseStereo::create(options.dense_stereo, rig));
+  }
+  return VioSystem(std::move(tracker), std::move(estimator), std::move(dense));
 }
 
 StatusOr<StereoOutput> VioSystem::feed_stereo(TimestampNs t_ns, const cv::Mat& left, const cv::Mat& right) {
@@ -17,6 +25,17 @@ StatusOr<StereoOutput> VioSystem::feed_stereo(TimestampNs t_ns, const cv::Mat& l
   frame.t_ns = t_ns;
   frame.features = out.tracked.features;
   MRVS_ASSIGN_OR_RETURN(out.estimate, estimator_.feed_frame(frame));
+  if (dense_ && estimator_.wants_dense_submap(t_ns)) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto points = dense_->points(left, right);
+    if (points.ok()) {
+      estimator_.add_dense_submap(t_ns, *points);
+    } else {
+      spdlog::warn("dense stereo at {} ns: {}", t_ns, std::string(points.status().message()));
+    }
+    out.dense_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    out.tracked.timing.image_ms += out.dense_ms;
+  }
   return out;
 }
 

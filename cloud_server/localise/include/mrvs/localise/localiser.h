@@ -6,7 +6,8 @@
 //      level, exact on the grid's lattice, keeping the best few mutually distinct poses;
 //   2. fine: 4-DoF point-to-plane ICP of each against a finer level (with normals);
 //   3. verify: fitness (share of the submap on the map's surface), ambiguity (the best distinct
-//      other pose's fitness over the best's), and the covariance from the fine stage's
+//      other pose's structure score over the best's: inliers on vertical surfaces, which tell placements
+//      apart where a floor does not), and the covariance from the fine stage's
 //      information matrix, inflated (registration covariances are optimistic).
 // Read-only after create(): localise() is thread-safe and runs on the calling thread.
 #include <memory>

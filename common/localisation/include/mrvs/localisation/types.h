@@ -60,7 +60,7 @@ struct Result {
   Mat6d covariance = Mat6d::Zero();  ///< of [rho; phi] about the anchor (see above)
   double fitness = 0.0;   ///< share of the submap's points on the map's surface at T_m_o, [0, 1]
   double rmse_m = 0.0;    ///< point-to-plane residual of those points, m
-  double ambiguity = 0.0; ///< fitness of the best distinct other pose / best fitness, [0, 1]
+  double ambiguity = 0.0; ///< the best distinct other pose's structure score / the best's, [0, 1] (1: as good)
   int hypotheses = 0;     ///< distinct poses refined
   double time_ms = 0.0;   ///< registration time on the cloud
 };

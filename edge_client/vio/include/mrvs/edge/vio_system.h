@@ -9,6 +9,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "mrvs/config/options.h"
+#include "mrvs/edge/dense_stereo.h"
 #include "mrvs/edge/feature_tracker.h"
 #include "mrvs/edge/vio_estimator.h"
 
@@ -32,12 +33,14 @@ struct CalibrationOptions : config::OptionsEquality<CalibrationOptions> {
 struct EdgeOptions : config::OptionsEquality<EdgeOptions> {
   CalibrationOptions calibration;
   TrackerOptions tracker;
+  DenseStereoOptions dense_stereo;
   EstimatorOptions estimator;
 
   template <class V>
   void visit(V& v) {
     v.section("calibration", calibration, "calibration files");
     v.section("tracker", tracker, "front-end");
+    v.section("dense_stereo", dense_stereo, "dense stereo (localisation submaps, estimator.localisation.submap_source)");
     v.section("estimator", estimator, "filter");
   }
 };
@@ -45,6 +48,7 @@ struct EdgeOptions : config::OptionsEquality<EdgeOptions> {
 struct StereoOutput {
   TrackedFrame tracked;  ///< features, tracker statistics, timing (a) and (b)
   FrameOutput estimate;  ///< pose, filter statistics, timing (c)
+  double dense_ms = 0.0;  ///< dense stereo for the localisation submap (part of timing (a))
 };
 
 class VioSystem {
@@ -63,10 +67,11 @@ class VioSystem {
   const VioEstimator& estimator() const { return estimator_; }
 
  private:
-  VioSystem(FeatureTracker tracker, VioEstimator estimator)
-      : tracker_(std::move(tracker)), estimator_(std::move(estimator)) {}
+  VioSystem(FeatureTracker tracker, VioEstimator estimator, std::optional<DenseStereo> dense)
+      : tracker_(std::move(tracker)), estimator_(std::move(estimator)), dense_(std::move(dense)) {}
   FeatureTracker tracker_;
   VioEstimator estimator_;
+  std::optional<DenseStereo> dense_;  ///< with submap_source dense_stereo
 };
 
 }  // namespace mrvs::edge

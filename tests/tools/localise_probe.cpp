@@ -1,0 +1,189 @@
+// localise_probe: the localisation service measured without the network. Runs the edge's
+// VIO (VioSystem, the shipped config) on a EuRoC folder with the cloud in process
+// (InProcessCloud: the map's QueryEngine and Localiser; each reply held back by the
+// registration time it took, in the sensor clock, as in a real-time run) and compares every
+// localisation answer with the ground truth (read here, by the measurement, never by the
+// estimator): the error of T_map_odom at the submap's anchor, and of the pose at the frame the
+// edge accepted an answer. Prints one line per request (--per-request) and KEY: value lines.
+//
+//   localise_probe --dataset SEQ --map MAP.mrvm --config config/euroc.yaml
+//                  --map-config config/map_indoor.yaml [--set ...] [--until-localised]
+// Exit codes: 0 done, 1 data error, 2 usage error.
+#include <map>
+#include <memory>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+#include <CLI/CLI.hpp>
+#include <opencv2/core/utility.hpp>
+
+#include "mrvs/config/yaml_document.h"
+#include "mrvs/core/cli.h"
+#include "mrvs/core/stats.h"
+#include "mrvs/edge/global_alignment.h"
+#include "mrvs/edge/vio_system.h"
+#include "mrvs/geometry/angles.h"
+#include "mrvs/io/dataset.h"
+#include "mrvs/io/trajectory_io.h"
+#include "mrvs/map/map_file.h"
+#include "mrvs/test/in_process_cloud.h"
+
+namespace {
+
+using mrvs::SE3d;
+using mrvs::TimestampNs;
+
+struct Args {
+  std::string dataset, map, config, map_config;
+  std::vector<std::string> overrides, map_overrides;
+  bool per_request = false;
+  bool until_localised = false;
+  int frames = 0;
+  std::string log_level = "warn";
+};
+
+struct Cloud {
+  std::shared_ptr<mrvs::test::InProcessCloud> service;
+};
+
+mrvs::StatusOr<Cloud> make_cloud(const Args& a) {
+  MRVS_ASSIGN_OR_RETURN(const auto doc, mrvs::config::load_yaml_with_overrides(a.map_config, a.map_overrides));
+  MRVS_ASSIGN_OR_RETURN(const auto query, mrvs::config::load_options<mrvs::map::QueryOptions>(doc, "query"));
+  MRVS_ASSIGN_OR_RETURN(const auto loc, mrvs::config::load_options<mrvs::localise::LocaliserOptions>(doc, "localise"));
+  MRVS_ASSIGN_OR_RETURN(mrvs::map::VoxelMap vm, mrvs::map::load_voxel_map(a.map));
+  auto shared = std::make_shared<const mrvs::map::VoxelMap>(std::move(vm));
+  MRVS_ASSIGN_OR_RETURN(auto engine, mrvs::map::QueryEngine::create(shared, query));
+  MRVS_ASSIGN_OR_RETURN(auto localiser, mrvs::localise::Localiser::create(shared, loc));
+  Cloud c;
+  c.service = std::make_shared<mrvs::test::InProcessCloud>(
+      std::make_shared<const mrvs::map::QueryEngine>(std::move(engine)),
+      std::make_shared<const mrvs::localise::Localiser>(std::move(localiser)));
+  return c;
+}
+
+/// sim0/T_map_world.yaml of a generated sequence (identity when absent).
+SE3d map_from_world(const std::string& dataset) {
+  try {
+    const YAML::Node n = YAML::LoadFile(dataset + "/sim0/T_map_world.yaml")["T_map_world"]["data"];
+    Eigen::Matrix4d T;
+    for (int i = 0; i < 16; ++i) T(i / 4, i % 4) = n[i].as<double>();
+    return SE3d::from_matrix(T);
+  } catch (const std::exception&) {
+    return SE3d();
+  }
+}
+
+struct Error {
+  double m = 0.0, deg = 0.0;
+};
+
+Error pose_error(const SE3d& est, const SE3d& truth) {
+  return {(est.translation() - truth.translation()).norm(),
+          std::abs(mrvs::edge::yaw_of(est * truth.inverse())) * mrvs::kRadToDeg};
+}
+
+int run(const Args& a) {
+  cv::setNumThreads(1);
+  auto cfg = mrvs::config::load_yaml_with_overrides(a.config, a.overrides);
+  if (!cfg.ok()) return fmt::print(stderr, "localise_probe: {}\n", std::string(cfg.status().message())), mrvs::kExitUsageError;
+  auto options = mrvs::config::load_options<mrvs::edge::EdgeOptions>(*cfg);
+  auto cloud = options.ok() ? make_cloud(a) : mrvs::StatusOr<Cloud>(options.status());
+  if (!cloud.ok()) return fmt::print(stderr, "localise_probe: {}\n", std::string(cloud.status().message())), mrvs::kExitUsageError;
+  mrvs::io::DatasetOptions dopt;
+  dopt.path = a.dataset;
+  auto data = mrvs::io::open_euroc_dataset(dopt);
+  if (!data.ok() || !(*data)->has_groundtruth()) {
+    fmt::print(stderr, "localise_probe: {}\n", data.ok() ? std::string("the dataset has no ground truth") : std::string(data.status().message()));
+    return mrvs::kExitDataError;
+  }
+  const mrvs::io::Trajectory gt = mrvs::io::to_trajectory((*data)->groundtruth());
+  const SE3d T_m_w = map_from_world(a.dataset);
+  auto vio = mrvs::edge::VioSystem::create(*options, (*data)->calibration());
+  if (!vio.ok()) return fmt::print(stderr, "localise_probe: {}\n", std::string(vio.status().message())), mrvs::kExitUsageError;
+  vio->set_map_service(cloud->service.get());
+  const auto& frames = (*data)->stereo_frames();
+  const auto& imu = (*data)->imu();
+  const mrvs::DurationNs td = (*data)->calibration().cameras[0].time_offset_ns;
+  std::map<TimestampNs, SE3d> odometry;  ///< estimator pose by camera time, odometry frame
+  std::size_t next_imu = 0;
+  TimestampNs init_ns = 0, lock_ns = 0;
+  std::optional<Error> lock_error;
+  const std::size_t n = a.frames > 0 ? std::min<std::size_t>(frames.size(), a.frames) : frames.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& f = frames[k];
+    while (next_imu < imu.size()) {
+      if (!vio->feed_imu(imu[next_imu]).ok()) break;
+      if (imu[next_imu++].t_ns >= f.t_ns + td) break;
+    }
+    cloud->service->set_now(f.t_ns);
+    auto left = (*data)->load_image(0, f.left);
+    auto right = (*data)->load_image(1, f.right);
+    if (!left.ok() || !right.ok()) return mrvs::kExitDataError;
+    auto out = vio->feed_stereo(f.t_ns, *left, *right);
+    if (!out.ok() || !out->estimate.T_w_b) continue;
+    const auto& e = out->estimate;
+    if (init_ns == 0) init_ns = f.t_ns;
+    if (!e.in_map_frame) odometry[f.t_ns] = *e.T_w_b;
+    if (e.T_m_o && !lock_error) {
+      lock_ns = f.t_ns;
+      auto truth = mrvs::edge::interpolate_trajectory(gt, e.t_imu_ns);
+      if (truth.ok()) lock_error = pose_error(*e.T_w_b, T_m_w * *truth);
+      if (a.until_localised) break;
+    }
+  }
+  int ok = 0, wrong = 0;
+  std::vector<double> err_m, err_deg, cloud_ms;
+  for (const auto& x : cloud->service->exchanges()) {
+    const auto it = odometry.find(x.request.stamp_ns);
+    auto truth = mrvs::edge::interpolate_trajectory(gt, x.request.stamp_ns + td);
+    if (it == odometry.end() || !truth.ok()) continue;
+    const SE3d T_m_o_true = T_m_w * *truth * it->second.inverse();
+    const Error e = pose_error(x.result.T_m_o * it->second, T_m_o_true * it->second);
+    cloud_ms.push_back(x.result.time_ms);
+    const bool is_ok = x.result.status == mrvs::localisation::Status::kOk;
+    ok += is_ok;
+    if (is_ok) {
+      err_m.push_back(e.m);
+      err_deg.push_back(e.deg);
+      wrong += e.m > 0.1 || e.deg > 2.0;
+    }
+    if (a.per_request) {
+      fmt::print("REQUEST {} t {:.2f} s points {} status '{}' fitness {:.2f} ambiguity {:.2f} error {:.3f} m {:.2f} deg "
+                 "cloud {:.0f} ms ({})\n",
+                 x.request.seq, mrvs::to_seconds(x.request.stamp_ns - init_ns), x.request.points.size(),
+                 mrvs::localisation::status_name(x.result.status), x.result.fitness, x.result.ambiguity, e.m, e.deg,
+                 x.result.time_ms, x.result.detail);
+    }
+  }
+  fmt::print("REQUESTS: {}\nANSWERS_OK: {}\nANSWERS_OK_WRONG: {}\n", cloud->service->exchanges().size(), ok, wrong);
+  fmt::print("ANSWER_ERROR_M_MEDIAN: {:.4f}\nANSWER_ERROR_DEG_MEDIAN: {:.3f}\n", mrvs::quantile(err_m, 0.5),
+             mrvs::quantile(err_deg, 0.5));
+  fmt::print("CLOUD_MS_MEDIAN: {:.1f}\nCLOUD_MS_P95: {:.1f}\n", mrvs::quantile(cloud_ms, 0.5),
+             mrvs::quantile(cloud_ms, 0.95));
+  fmt::print("LOCALISED: {}\nLOCALISED_AFTER_S: {:.3f}\n", lock_error ? 1 : 0,
+             lock_error ? mrvs::to_seconds(lock_ns - init_ns) : -1.0);
+  fmt::print("LOCK_ERROR_M: {:.4f}\nLOCK_ERROR_DEG: {:.3f}\n", lock_error ? lock_error->m : -1.0,
+             lock_error ? lock_error->deg : -1.0);
+  return mrvs::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Measures the cloud's localisation on a EuRoC folder with ground truth, in process.", "localise_probe"};
+  Args a;
+  app.add_option("--dataset", a.dataset, "EuRoC folder with ground truth")->required();
+  app.add_option("--map", a.map, "Voxel map (.mrvm)")->required()->check(CLI::ExistingFile);
+  app.add_option("--config", a.config, "Edge tuning file (config/euroc.yaml)")->required()->check(CLI::ExistingFile);
+  app.add_option("--map-config", a.map_config, "Cloud tuning file (config/map_indoor.yaml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--set", a.overrides, "Edge option override, e.g. estimator.localisation.window_s=2");
+  app.add_option("--map-set", a.map_overrides, "Cloud option override, e.g. localise.inlier_m=0.08");
+  app.add_option("--frames", a.frames, "Frames to run (0 = all)");
+  app.add_flag("--per-request", a.per_request, "One line per localisation request");
+  app.add_flag("--until-localised", a.until_localised, "Stop at the first accepted answer");
+  mrvs::add_log_level_option(app, a.log_level);
+  if (auto exit_code = mrvs::parse_command_line(app, argc, argv, a.log_level)) return *exit_code;
+  return run(a);
+}
