@@ -358,6 +358,14 @@ StatusOr<ImuCalibration> load_euroc_imu_yaml(const std::filesystem::path& path) 
   });
 }
 
+StatusOr<SE3d> read_euroc_T_BS(const YamlDocument& doc) {
+  return guarded<SE3d>(doc.name, [&]() -> StatusOr<SE3d> {
+    std::vector<std::string> errors;
+    const Fields f(doc, doc.root, "", &errors);
+    return finish(euroc_transform(f, "T_BS"), errors);
+  });
+}
+
 StatusOr<std::array<CameraCalibration, 2>> load_kalibr_camchain(const std::filesystem::path& path) {
   using Cameras = std::array<CameraCalibration, 2>;
   MRVS_ASSIGN_OR_RETURN(const YamlDocument doc, load_yaml_file(path));

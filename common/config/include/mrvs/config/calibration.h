@@ -15,6 +15,8 @@
 
 namespace mrvs::config {
 
+struct YamlDocument;
+
 struct CameraCalibration {
   std::string name;                                  ///< "cam0", "cam1"
   std::shared_ptr<const camera::CameraModel> model;  ///< intrinsics, distortion and size
@@ -46,6 +48,10 @@ struct StereoRigCalibration {
 StatusOr<CameraCalibration> load_euroc_camera_yaml(const std::filesystem::path& path);
 /// EuRoC `mav0/imu0/sensor.yaml`.
 StatusOr<ImuCalibration> load_euroc_imu_yaml(const std::filesystem::path& path);
+/// T_BS of any EuRoC `mav0/<sensor>/sensor.yaml` document (e.g. gnss0): the sensor frame s in
+/// the IMU body frame, T_b_s ({rows: 4, cols: 4, data: [16 numbers, row-major]}, checked to be
+/// a rigid transform). Errors name the file, line and key.
+StatusOr<SE3d> read_euroc_T_BS(const YamlDocument& doc);
 /// Kalibr camchain (`camchain-imucam.yaml`: cam0/cam1 with T_cam_imu, intrinsics, ...).
 StatusOr<std::array<CameraCalibration, 2>> load_kalibr_camchain(const std::filesystem::path& path);
 /// Kalibr IMU file (`imu.yaml`: imu0 with noise densities and update_rate).
