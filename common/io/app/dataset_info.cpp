@@ -1,6 +1,7 @@
 // dataset_info: opens a dataset folder with the same reader the edge client uses, checks
 // it (every listed image exists, rows in time order, stereo pairing, IMU coverage) and
-// prints its summary, calibration and warnings.
+// prints its summary (with the optional ground truth and GNSS streams), calibration and
+// warnings.
 //
 //   dataset_info --dataset DIR [--format euroc] [--stereo-tolerance 0] [--log-level info]
 //
@@ -35,9 +36,9 @@ int run(const Args& args) {
   const mrvs::io::DatasetReader& reader = **dataset;
   fmt::print("{}\n", reader.summary().describe());
   fmt::print("calibration:\n{}\n", reader.calibration().describe());
-  fmt::print("STEREO_FRAMES: {}\nIMU_SAMPLES: {}\nGROUNDTRUTH_STATES: {}\nWARNINGS: {}\n",
+  fmt::print("STEREO_FRAMES: {}\nIMU_SAMPLES: {}\nGROUNDTRUTH_STATES: {}\nGNSS_FIXES: {}\nWARNINGS: {}\n",
              reader.stereo_frames().size(), reader.imu().size(), reader.groundtruth().size(),
-             reader.warnings().size());
+             reader.gnss().size(), reader.warnings().size());
   for (const std::string& warning : reader.warnings()) spdlog::warn("{}", warning);
   return 0;
 }

@@ -75,6 +75,15 @@ std::string DatasetSummary::describe() const {
                       cameras[1].name);
   text += "  " + imu.describe() + "\n";
   text += groundtruth ? "  " + groundtruth->describe() + "\n" : std::string("  ground truth: none\n");
+  if (gnss) {
+    text += "  " + gnss->describe() + "\n";
+    if (p_b_gnss) {
+      text += fmt::format("  gnss0 antenna in the body frame: [{:.3f}, {:.3f}, {:.3f}] m\n", p_b_gnss->x(),
+                          p_b_gnss->y(), p_b_gnss->z());
+    }
+  } else {
+    text += "  gnss: none\n";
+  }
   return text;
 }
 

@@ -156,6 +156,8 @@ class EurocDataset final : public DatasetReader {
   const std::vector<StereoFrame>& stereo_frames() const override { return stereo_; }
   const std::vector<ImuSample>& imu() const override { return imu_; }
   const std::vector<GroundTruthState>& groundtruth() const override { return groundtruth_; }
+  const std::vector<GnssFix>& gnss() const override { return gnss_; }
+  const std::optional<SE3d>& T_b_gnss() const override { return T_b_gnss_; }
   const config::StereoRigCalibration& calibration() const override { return calibration_; }
   const DatasetSummary& summary() const override { return summary_; }
   const Warnings& warnings() const override { return warnings_; }
@@ -167,6 +169,7 @@ class EurocDataset final : public DatasetReader {
   Status read_streams(const std::filesystem::path& mav0, const ReadPolicy& policy, bool check_files,
                       bool read_groundtruth);
   Status load_calibration(const std::filesystem::path& mav0, const DatasetOptions& options);
+  Status read_gnss(const std::filesystem::path& mav0, const ReadPolicy& policy);
   Status pair_stereo(DurationNs tolerance_ns);
   void summarize(const std::filesystem::path& mav0);
   void check_imu_coverage();
@@ -175,6 +178,9 @@ class EurocDataset final : public DatasetReader {
   std::vector<StereoFrame> stereo_;
   std::vector<ImuSample> imu_;
   std::vector<GroundTruthState> groundtruth_;
+  std::vector<GnssFix> gnss_;
+  std::optional<SE3d> T_b_gnss_;
+  double gnss_rate_hz_ = 0.0;
   config::StereoRigCalibration calibration_;
   DatasetSummary summary_;
   Warnings warnings_;
@@ -184,6 +190,7 @@ Status EurocDataset::open(const DatasetOptions& options) {
   MRVS_ASSIGN_OR_RETURN(const std::filesystem::path mav0, find_mav0(options.path));
   MRVS_RETURN_IF_ERROR(read_streams(mav0, options.policy, options.check_image_files, options.read_groundtruth));
   MRVS_RETURN_IF_ERROR(load_calibration(mav0, options));
+  MRVS_RETURN_IF_ERROR(read_gnss(mav0, options.policy));
   MRVS_RETURN_IF_ERROR(pair_stereo(options.stereo_tolerance_ns));
   summarize(mav0);
   check_imu_coverage();
@@ -233,6 +240,30 @@ Status EurocDataset::load_calibration(const std::filesystem::path& mav0, const D
                       cam));
     }
   }
+  return absl::OkStatus();
+}
+
+/// mav0/gnss0 (optional): data.csv and, with it, sensor.yaml for the antenna's lever arm.
+Status EurocDataset::read_gnss(const std::filesystem::path& mav0, const ReadPolicy& policy) {
+  const std::filesystem::path folder = mav0 / "gnss0";
+  if (!is_file(folder / "data.csv")) {
+    if (is_dir(folder)) {
+      warnings_.push_back(
+          fmt::format("{} exists but has no data.csv; reading the sequence without GNSS", folder.string()));
+    }
+    return absl::OkStatus();
+  }
+  const std::filesystem::path yaml = folder / "sensor.yaml";
+  if (!is_file(yaml)) {
+    return absl::NotFoundError(
+        fmt::format("GNSS calibration {} does not exist: it gives the antenna position in the body frame "
+                    "(T_BS) and the fix rate for the fixes in {}; add it, or remove the gnss0 folder",
+                    yaml.string(), (folder / "data.csv").string()));
+  }
+  MRVS_ASSIGN_OR_RETURN(const GnssSensor sensor, read_gnss_sensor_yaml(yaml));
+  MRVS_ASSIGN_OR_RETURN(gnss_, read_euroc_gnss_csv(folder / "data.csv", policy, &warnings_));
+  T_b_gnss_ = sensor.T_b_antenna;
+  gnss_rate_hz_ = sensor.rate_hz;
   return absl::OkStatus();
 }
 
@@ -286,6 +317,13 @@ void EurocDataset::summarize(const std::filesystem::path& mav0) {
   }
   for (const StreamSummary* s : {&summary_.cameras[0], &summary_.cameras[1], &summary_.imu}) {
     if (s->gap_count > 0) warnings_.push_back(s->describe());
+  }
+  if (!gnss_.empty()) {
+    t.clear();
+    for (const GnssFix& f : gnss_) t.push_back(f.t_ns);
+    summary_.gnss = summarize_stream("gnss0", t, gnss_rate_hz_);
+    summary_.p_b_gnss = T_b_gnss_->translation();
+    if (summary_.gnss->gap_count > 0) warnings_.push_back(summary_.gnss->describe());
   }
 }
 

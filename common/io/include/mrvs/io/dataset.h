@@ -12,6 +12,8 @@
 //                                        a_RS_S_x [m s^-2],a_RS_S_y,a_RS_S_z"
 //   <sequence>/mav0/imu0/sensor.yaml
 //   <sequence>/mav0/state_groundtruth_estimate0/data.csv   (optional)
+//   <sequence>/mav0/gnss0/data.csv, sensor.yaml   (optional, the simulator's extension:
+//                                                   GNSS fixes of an antenna, see mrvs/io/gnss.h)
 #include <array>
 #include <cstddef>
 #include <filesystem>
@@ -24,6 +26,7 @@
 
 #include "mrvs/config/calibration.h"
 #include "mrvs/core/status.h"
+#include "mrvs/io/gnss.h"
 #include "mrvs/io/trajectory_io.h"
 #include "mrvs/io/types.h"
 
@@ -77,6 +80,8 @@ struct DatasetSummary {
   std::array<std::size_t, 2> unmatched = {0, 0};  ///< frames of cam0 / cam1 without a partner
   StreamSummary imu;
   std::optional<StreamSummary> groundtruth;
+  std::optional<StreamSummary> gnss;  ///< "gnss0", when the dataset has GNSS fixes
+  std::optional<Vec3d> p_b_gnss;      ///< the GNSS antenna in the body frame (lever arm), m
   /// Multi-line human-readable text.
   std::string describe() const;
 };
@@ -114,6 +119,12 @@ class DatasetReader {
   /// Empty when the dataset has no ground truth.
   virtual const std::vector<GroundTruthState>& groundtruth() const = 0;
   bool has_groundtruth() const { return !groundtruth().empty(); }
+  /// GNSS fixes (antenna positions in the map frame, mrvs/io/gnss.h), strictly increasing in
+  /// time; empty when the dataset has none (real EuRoC).
+  virtual const std::vector<GnssFix>& gnss() const = 0;
+  bool has_gnss() const { return !gnss().empty(); }
+  /// The GNSS antenna in the IMU body frame (gnss0/sensor.yaml T_BS); nullopt without GNSS.
+  virtual const std::optional<SE3d>& T_b_gnss() const = 0;
   virtual const config::StereoRigCalibration& calibration() const = 0;
   virtual const DatasetSummary& summary() const = 0;
   /// Non-fatal findings while opening (dropped duplicates, unmatched frames, gaps, ...).

@@ -38,4 +38,12 @@ struct GroundTruthState {
   Vec3d bias_accel = Vec3d::Zero();  ///< m/s^2
 };
 
+/// One GNSS position fix (mav0/gnss0/data.csv row; format in mrvs/io/gnss.h).
+struct GnssFix {
+  TimestampNs t_ns = 0;             ///< IMU clock
+  Vec3d p_map = Vec3d::Zero();      ///< position of the ANTENNA in the map frame, m
+  double sigma_horizontal_m = 0.0;  ///< standard deviation of each horizontal axis (x, y), m
+  double sigma_vertical_m = 0.0;    ///< standard deviation of z, m
+};
+
 }  // namespace mrvs::io
