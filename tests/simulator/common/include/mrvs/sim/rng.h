@@ -27,6 +27,7 @@ enum class Stream : std::uint64_t {
   kMapHoles = 9,
   kMisalignment = 10,
   kRoute = 11,
+  kGnss = 12,
 };
 
 using mrvs::mix64;
