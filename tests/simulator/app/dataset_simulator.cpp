@@ -120,10 +120,10 @@ int run(const Args& a) {
     return mrvs::kExitDataError;
   }
   fmt::print(
-      "OUT: {}\nFRAMES: {}\nIMU_SAMPLES: {}\nMAP_POINTS: {}\nSECONDS_RENDER: {:.2f}\nSECONDS_MAP: {:.2f}\n"
-      "SECONDS_TOTAL: {:.2f}\n",
-      report->out.string(), report->frames, report->imu_samples, report->map_points, report->seconds_render,
-      report->seconds_map, report->seconds_total);
+      "OUT: {}\nFRAMES: {}\nIMU_SAMPLES: {}\nMAP_POINTS: {}\nGNSS_FIXES: {}\nSECONDS_RENDER: {:.2f}\n"
+      "SECONDS_MAP: {:.2f}\nSECONDS_TOTAL: {:.2f}\n",
+      report->out.string(), report->frames, report->imu_samples, report->map_points, report->gnss_fixes,
+      report->seconds_render, report->seconds_map, report->seconds_total);
   return mrvs::kExitOk;
 }
 

@@ -11,6 +11,7 @@
 #include "mrvs/config/yaml_document.h"
 #include "mrvs/core/file.h"
 #include "mrvs/io/dataset.h"
+#include "mrvs/io/gnss.h"
 #include "mrvs/io/trajectory_io.h"
 #include "mrvs/sim/map_io.h"
 #include "mrvs/sim/photometry.h"
@@ -216,6 +217,25 @@ Status write_truth_files(const GeneratorRequest& r, const World& world, const fs
   return write_ply(sim0 / "pointcloud_clean.ply", map.clean_points, map_comment(r) + "; clean (no noise)");
 }
 
+/// mav0/gnss0/data.csv and sensor.yaml, sim0/gnss_truth.csv (only with gnss.enabled).
+Status write_gnss_files(const GeneratorRequest& r, const World& world, const fs::path& root) {
+  if (world.gnss.empty()) return absl::OkStatus();
+  const GnssSimOptions& o = r.options.gnss;
+  std::vector<io::GnssFix> fixes;
+  fixes.reserve(world.gnss.size());
+  for (const GnssSimFix& f : world.gnss) {
+    fixes.push_back({f.t_ns, f.p_measured_map, o.sigma_horizontal_m, o.sigma_vertical_m});
+  }
+  const fs::path dir = root / "mav0/gnss0";
+  MRVS_RETURN_IF_ERROR(io::write_euroc_gnss_csv(dir / "data.csv", fixes));
+  const std::string comment = fmt::format(
+      "Synthetic GNSS receiver (antenna positions in the map frame of pointcloud0, generator {}, "
+      "seed {}).",
+      generator_version(), r.options.seed);
+  MRVS_RETURN_IF_ERROR(write_file_atomically(dir / "sensor.yaml", gnss_sensor_yaml(o, comment)));
+  return write_gnss_truth_csv(root / "sim0/gnss_truth.csv", world.gnss);
+}
+
 Status make_folders(const fs::path& root) {
   for (const char* sub : {"mav0/cam0/data", "mav0/cam1/data", "mav0/imu0", "mav0/state_groundtruth_estimate0",
                           "mav0/pointcloud0", "sim0"}) {
@@ -261,12 +281,19 @@ StatusOr<World> build_world(const GeneratorRequest& r, const ProgressCallback& p
   world.rig = r.profile == SceneProfile::kIndoor ? euroc_rig() : kaist_like_rig();
   MRVS_ASSIGN_OR_RETURN(world.calibration, world.rig.calibration());
   MRVS_RETURN_IF_ERROR(plan_motion(r, world));
+  if (r.options.gnss.enabled) {  // a rate off the IMU grid fails before the scene and map are built
+    MRVS_RETURN_IF_ERROR(gnss_period_ns(r.options.gnss.rate_hz, world.grid.imu_period_ns).status());
+  }
   MRVS_RETURN_IF_ERROR(plan_states(world));
   const std::uint64_t seed = static_cast<std::uint64_t>(r.options.seed);
   if (progress) progress({"scene", 0, 1});
   MRVS_ASSIGN_OR_RETURN(world.scene, build_scene(r, world, seed));
   if (progress) progress({"map", 0, 1});
   MRVS_ASSIGN_OR_RETURN(world.map, sample_prior_map(*world.scene, world.body_positions, r.options.map, seed));
+  if (r.options.gnss.enabled) {
+    MRVS_ASSIGN_OR_RETURN(world.gnss,
+                          simulate_gnss(world.states, world.map.T_map_world, r.options.gnss, seed));
+  }
   return world;
 }
 
@@ -295,12 +322,14 @@ StatusOr<GeneratorReport> generate_dataset(const GeneratorRequest& r, const Prog
 
   MRVS_RETURN_IF_ERROR(write_sensor_files(world, r.options, mav0, records));
   MRVS_RETURN_IF_ERROR(write_truth_files(r, world, staging.path() / "sim0"));
+  MRVS_RETURN_IF_ERROR(write_gnss_files(r, world, staging.path()));
   MRVS_RETURN_IF_ERROR(staging.commit());
 
   report.out = staging.destination();
   report.frames = static_cast<std::int64_t>(world.grid.camera_true_ns.size());
   report.imu_samples = static_cast<std::int64_t>(world.grid.imu_ns.size());
   report.map_points = static_cast<std::int64_t>(map.points.size());
+  report.gnss_fixes = static_cast<std::int64_t>(world.gnss.size());
   report.t_begin_ns = world.grid.imu_ns.front();
   report.t_end_ns = world.grid.imu_ns.back();
   report.seconds_total = seconds_since(start);

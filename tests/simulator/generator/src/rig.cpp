@@ -181,4 +181,18 @@ std::string pointcloud_sensor_yaml(const std::string& comment) {
                      t_bs_block(Mat4d::Identity()));
 }
 
+std::string gnss_sensor_yaml(const GnssSimOptions& gnss, const std::string& comment) {
+  Mat4d T_BS = Mat4d::Identity();
+  T_BS.topRightCorner<3, 1>() = gnss.lever_arm_m;
+  return fmt::format(
+      "# General sensor definitions.\nsensor_type: gnss\ncomment: {}\n\n{}\n"
+      "# GNSS specific definitions: fixes of the antenna position (T_BS translation) in the map frame.\n"
+      "rate_hz: {}  # [ Hz ]\n"
+      "sigma_horizontal_m: {}  # [ m ] standard deviation of each horizontal axis (x, y)\n"
+      "sigma_vertical_m: {}  # [ m ] standard deviation of z\n"
+      "correlation_time_s: {}  # [ s ] time constant of the first-order Gauss-Markov error\n",
+      comment, t_bs_block(T_BS), number(gnss.rate_hz), number(gnss.sigma_horizontal_m),
+      number(gnss.sigma_vertical_m), number(gnss.correlation_time_s));
+}
+
 }  // namespace mrvs::sim

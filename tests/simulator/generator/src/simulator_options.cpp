@@ -29,6 +29,7 @@ SimulatorOptions default_options(SceneProfile profile) {
   o.imu.initial_accel_bias = Vec3d(0.03, -0.02, 0.05);
   o.map = outdoor_map_options();
   o.route = test_car_route();
+  o.gnss.enabled = true;
   return o;
 }
 
@@ -51,6 +52,7 @@ Status apply_preset(const std::string& preset, SimulatorOptions& o) {
     o.map.misalignment_deg = 0.0;
     o.map.misalignment_m = 0.0;
     o.time_offset_ms = 0.0;
+    o.gnss.outlier_probability = 0.0;
     return absl::OkStatus();
   }
   if (preset == "realistic") {
@@ -65,6 +67,7 @@ Status apply_preset(const std::string& preset, SimulatorOptions& o) {
     o.map.noise_tangent_sigma_m = 0.001;
     o.map.intensity_noise_sigma = 0.01;
     o.map.holes_fraction = 0.05;
+    o.gnss.outlier_probability = 0.02;
     return absl::OkStatus();
   }
   return absl::InvalidArgumentError(

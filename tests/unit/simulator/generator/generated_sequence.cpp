@@ -29,10 +29,34 @@ GeneratorRequest indoor_request(const std::filesystem::path& out, double duratio
   return r;
 }
 
-std::filesystem::path shared_indoor_sequence() {
-  const char* dir = std::getenv("MRVS_GENERATED_INDOOR");
-  return dir != nullptr ? std::filesystem::path(dir) : std::filesystem::path();
+namespace {
+
+/// <MRVS_GENERATED_DATA>/<name> under CTest, else empty.
+std::filesystem::path shared_sequence(const char* name) {
+  const char* dir = std::getenv("MRVS_GENERATED_DATA");
+  return dir != nullptr ? std::filesystem::path(dir) / name : std::filesystem::path();
 }
+
+}  // namespace
+
+std::filesystem::path shared_indoor_sequence() { return shared_sequence("generated_indoor"); }
+
+GeneratorRequest outdoor_gnss_request(const std::filesystem::path& out) {
+  GeneratorRequest r;
+  r.profile = SceneProfile::kOutdoor;
+  r.out = out;
+  r.preset = "easy";
+  r.options = default_options(SceneProfile::kOutdoor);
+  EXPECT_TRUE(apply_preset("easy", r.options).ok());
+  auto doc = config::load_yaml_file(MRVS_OUTDOOR_GNSS_FIXTURE_YAML);
+  EXPECT_TRUE(doc.ok()) << doc.status();
+  if (doc.ok()) {
+    EXPECT_TRUE(config::update_options(*doc, "", r.options).ok());
+  }
+  return r;
+}
+
+std::filesystem::path shared_outdoor_gnss_sequence() { return shared_sequence("generated_outdoor_gnss"); }
 
 std::map<std::string, std::string> read_tree(const std::filesystem::path& root) {
   std::map<std::string, std::string> files;

@@ -14,9 +14,17 @@ namespace mrvs::sim::test {
 GeneratorRequest indoor_request(const std::filesystem::path& out, double duration_s = -1.0,
                                 double start_s = -1.0);
 
-/// The sequence CTest generated for this request (fixture sim_generated_indoor), or empty
+/// The sequence CTest generated for this request (fixture sim_generated), or empty
 /// when the test runs outside CTest (then the test generates its own).
 std::filesystem::path shared_indoor_sequence();
+
+/// The shared outdoor GNSS request: the outdoor profile, preset easy, options from
+/// outdoor_gnss_fixture.yaml (1 s window, 20 Hz GNSS with outliers, misaligned coarse map).
+GeneratorRequest outdoor_gnss_request(const std::filesystem::path& out);
+
+/// The sequence CTest generated for outdoor_gnss_request (fixture sim_generated), or empty
+/// outside CTest.
+std::filesystem::path shared_outdoor_gnss_sequence();
 
 /// Bytes of every regular file below `root`, keyed by relative path.
 std::map<std::string, std::string> read_tree(const std::filesystem::path& root);

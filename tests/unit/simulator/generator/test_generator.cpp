@@ -83,6 +83,15 @@ TEST_F(GeneratedIndoor, TheProjectsEurocReaderTakesItUnchanged) {
   }
 }
 
+TEST_F(GeneratedIndoor, HasNoGnss) {
+  EXPECT_FALSE(request_->options.gnss.enabled);
+  EXPECT_FALSE(std::filesystem::exists(dir_->path() / "seq/mav0/gnss0"));
+  EXPECT_FALSE(std::filesystem::exists(dir_->path() / "seq/sim0/gnss_truth.csv"));
+  EXPECT_TRUE(world_->gnss.empty());
+  EXPECT_FALSE(dataset_->has_gnss());
+  EXPECT_FALSE(dataset_->T_b_gnss().has_value());
+}
+
 TEST_F(GeneratedIndoor, TheRequestReadBackRebuildsTheSameWorld) {
   auto request = load_generator_request(dir_->path() / "seq");
   ASSERT_TRUE(request.ok()) << request.status();
@@ -336,6 +345,7 @@ TEST(GeneratorOutdoor, WritesAKaistLikeSequenceTheReaderTakes) {
   EXPECT_TRUE((*dataset)->warnings().empty());
   EXPECT_EQ((*dataset)->stereo_frames().size(), 10u);  // 10 Hz
   EXPECT_EQ((*dataset)->imu().size(), 101u);           // 100 Hz
+  EXPECT_EQ((*dataset)->gnss().size(), 2u);            // 1 Hz, at 0 and 1 s
   EXPECT_NEAR((*dataset)->calibration().T_c0_c1().translation().norm(), 0.47515, 5e-5);
   auto image = (*dataset)->load_image(0, (*dataset)->images()[0].front());
   ASSERT_TRUE(image.ok()) << image.status();

@@ -11,6 +11,7 @@
 #include "mrvs/core/status.h"
 #include "mrvs/io/types.h"
 #include "mrvs/sim/car_route.h"
+#include "mrvs/sim/gnss_sim.h"
 #include "mrvs/sim/prior_map.h"
 #include "mrvs/sim/rig.h"
 #include "mrvs/sim/scene.h"
@@ -44,6 +45,7 @@ struct GeneratorReport {
   std::int64_t frames = 0;
   std::int64_t imu_samples = 0;
   std::int64_t map_points = 0;
+  std::int64_t gnss_fixes = 0;  ///< 0 when gnss.enabled is off
   TimestampNs t_begin_ns = 0;
   TimestampNs t_end_ns = 0;
   double seconds_total = 0.0;
@@ -66,6 +68,7 @@ struct World {
   std::vector<Vec3d> keep_clear;             ///< body and camera centres, world
   std::optional<Scene> scene;
   PriorMap map;
+  std::vector<GnssSimFix> gnss;  ///< GNSS fixes with their truth; empty when gnss.enabled is off
 
   /// T_w_b at camera frame k (its true, IMU-clock time).
   const SE3d& frame_pose(std::size_t k) const { return states[grid.camera_imu_index[k]].T_w_b; }

@@ -9,6 +9,7 @@
 #include "mrvs/config/calibration.h"
 #include "mrvs/core/status.h"
 #include "mrvs/geometry/types.h"
+#include "mrvs/sim/gnss_sim.h"
 
 namespace mrvs::sim {
 
@@ -60,5 +61,8 @@ std::string imu_sensor_yaml(const RigImu& imu);
 std::string groundtruth_sensor_yaml(const std::string& comment);
 /// mav0/pointcloud0/sensor.yaml.
 std::string pointcloud_sensor_yaml(const std::string& comment);
+/// mav0/gnss0/sensor.yaml (format in mrvs/io/gnss.h): T_BS = the antenna at
+/// gnss.lever_arm_m, the rate and the stationary sigmas of the error actually simulated.
+std::string gnss_sensor_yaml(const GnssSimOptions& gnss, const std::string& comment);
 
 }  // namespace mrvs::sim

@@ -10,6 +10,7 @@
 #include "mrvs/config/options.h"
 #include "mrvs/core/status.h"
 #include "mrvs/sim/car_route.h"
+#include "mrvs/sim/gnss_sim.h"
 #include "mrvs/sim/imu_sim.h"
 #include "mrvs/sim/map_options.h"
 #include "mrvs/sim/render_options.h"
@@ -47,6 +48,7 @@ struct SimulatorOptions : config::OptionsEquality<SimulatorOptions> {
   SceneKnobs scene;              ///< clutter and texture knobs
   RenderOptions render;          ///< anti-aliasing and photometric knobs
   MapOptions map;                ///< prior-map density, noise, holes, misalignment
+  GnssSimOptions gnss;           ///< GNSS fixes (outdoor default: on)
 
   template <class V>
   void visit(V& v) {
@@ -61,6 +63,7 @@ struct SimulatorOptions : config::OptionsEquality<SimulatorOptions> {
     v.section("scene", scene, "scene layout and textures");
     v.section("render", render, "image formation");
     v.section("map", map, "survey LiDAR prior map");
+    v.section("gnss", gnss, "GNSS position fixes of a roof antenna (mav0/gnss0)");
   }
 };
 
@@ -68,8 +71,9 @@ struct SimulatorOptions : config::OptionsEquality<SimulatorOptions> {
 StatusOr<SceneProfile> parse_profile(const std::string& name);
 std::string profile_name(SceneProfile profile);
 
-/// Defaults of a profile: indoor = EuRoC rig noise and the Vicon-room survey; outdoor =
-/// KAIST-like IMU, gravity 9.80766, the street survey and the test car route.
+/// Defaults of a profile: indoor = EuRoC rig noise and the Vicon-room survey, no GNSS;
+/// outdoor = KAIST-like IMU, gravity 9.80766, the street survey, the test car route and
+/// GNSS fixes at 1 Hz (gnss.enabled).
 SimulatorOptions default_options(SceneProfile profile);
 
 /// Names accepted by apply_preset.
@@ -77,7 +81,9 @@ std::vector<std::string> preset_names();
 /// "easy": every realism knob off (no pixel noise, fixed exposure, exact map, no holes or
 /// map changes). "realistic": pixel noise (2 DN read + shot), exposure walk, 3 % stereo gain
 /// mismatch, vignetting, 20 % textureless faces, 2 unmapped objects, 5 % map holes, map
-/// noise 3 mm / 1 mm. Error naming the accepted presets for another name.
+/// noise 3 mm / 1 mm. GNSS (when the profile has it) stays on with its noise in both; "easy"
+/// has no GNSS outliers, "realistic" 2 % per fix. Error naming the accepted presets for
+/// another name.
 Status apply_preset(const std::string& preset, SimulatorOptions& options);
 
 }  // namespace mrvs::sim
