@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <chrono>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
@@ -53,6 +54,7 @@ struct Args {
   std::string stage1_mode;
   int frames = 0;
   int threads = 1;
+  bool realtime = false;
   double progress_s = 5.0;
   std::string log_level = "info";
 };
@@ -85,15 +87,20 @@ void add_options(CLI::App& app, Args& a) {
   app.add_option("--stage1-mode", a.stage1_mode,
                  "known_landmark | msckf_nullspace (the reference code) | ray_depth | plane")
       ->check(CLI::IsMember({"known_landmark", "msckf_nullspace", "ray_depth", "plane"}));
-  app.add_option("--groundtruth", a.groundtruth,
-                 "Ground truth for the ablations that read it (alignment.source gt / gt_noisy, --query-pose-source "
-                 "gt; TUM or EuRoC csv; default: the dataset's own)")
+  app.add_option(
+         "--groundtruth", a.groundtruth,
+         "Ground truth for the ablations that read it (alignment.source gt / gt_noisy, --query-pose-source "
+         "gt; TUM or EuRoC csv; default: the dataset's own)")
       ->check(CLI::ExistingFile);
   app.add_option("--set", a.overrides, "Override one option, e.g. --set estimator.msckf.sigma_px=1.5");
   app.add_option("--frames", a.frames, "Stereo frames to process (0 = all)")->check(CLI::NonNegativeNumber);
   app.add_option("--threads", a.threads, "OpenCV threads (1 = the single-thread figures)")
       ->capture_default_str()
       ->check(CLI::Range(1, 256));
+  app.add_flag(
+      "--realtime", a.realtime,
+      "Feed the frames no faster than the sensor clock (as on a robot: the cloud's replies then arrive "
+      "as many frames later as they would live)");
   app.add_option("--progress", a.progress_s, "Seconds between progress lines (0 = none)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
@@ -142,7 +149,8 @@ mrvs::StatusOr<Inputs> load_inputs(const Args& a, bool* usage) {
   MRVS_ASSIGN_OR_RETURN(in.dataset, mrvs::io::open_euroc_dataset(dataset_options));
   for (const std::string& w : in.dataset->warnings()) spdlog::warn("{}", w);
   if (!needs_gt) {
-    if (!a.groundtruth.empty()) spdlog::warn("--groundtruth ignored: no ablation that reads ground truth is on");
+    if (!a.groundtruth.empty())
+      spdlog::warn("--groundtruth ignored: no ablation that reads ground truth is on");
     return in;
   }
   if (!a.groundtruth.empty()) {
@@ -152,7 +160,8 @@ mrvs::StatusOr<Inputs> load_inputs(const Args& a, bool* usage) {
   } else {
     return absl::FailedPreconditionError(fmt::format(
         "the ablation alignment.source '{}' / query_pose_source '{}' reads ground truth, and {} has no "
-        "state_groundtruth_estimate0: pass --groundtruth FILE, or use estimator.alignment.source map (the default)",
+        "state_groundtruth_estimate0: pass --groundtruth FILE, or use estimator.alignment.source map (the "
+        "default)",
         est.alignment.source, est.map.query_pose_source, a.dataset));
   }
   spdlog::info("ground truth read for the ablation (alignment.source {}, query_pose_source {})",
@@ -164,7 +173,7 @@ mrvs::StatusOr<Inputs> load_inputs(const Args& a, bool* usage) {
 struct LocalisationReport {
   int requests = 0, replies = 0, timeouts = 0, accepted = 0;
   std::vector<double> bytes_up, bytes_down, rtt_ms, cloud_ms, points;
-  double first_after_s = -1.0;          ///< sensor time from initialisation to the first acceptance
+  double first_after_s = -1.0;           ///< sensor time from initialisation to the first acceptance
   mrvs::TimestampNs first_t_imu_ns = 0;  ///< IMU time of the pose at that frame
 };
 
@@ -173,7 +182,7 @@ struct Report {
   std::vector<double> rays, hits, accepted, planes, registered, bytes_up, bytes_down, rtt_ms;
   int frames = 0, skipped = 0, initialized_at = -1, points_max = 0, frames_without_map = 0, requests = 0,
       timeouts = 0;
-  double frame_interval_ms = 0.0;  ///< median image interval of the dataset (the frame's real-time budget)
+  double frame_interval_ms = 0.0;   ///< median image interval of the dataset (the frame's real-time budget)
   mrvs::io::Trajectory trajectory;  ///< map frame
   mrvs::io::Trajectory odometry;    ///< every pose in its filter run's odometry frame, until mapped
   mrvs::io::Trajectory unmapped;    ///< poses of the current run not yet in the map frame
@@ -221,22 +230,32 @@ void print_report(const Report& r, double wall_s) {
       }());
   print_ms("RTT", r.rtt_ms);
   const LocalisationReport& L = r.loc;
-  fmt::print("LOCALISATION_REQUESTS: {}\nLOCALISATION_REPLIES: {}\nLOCALISATION_TIMEOUTS: {}\nLOCALISED: {}\n",
-             L.requests, L.replies, L.timeouts, L.accepted);
+  fmt::print(
+      "LOCALISATION_REQUESTS: {}\nLOCALISATION_REPLIES: {}\nLOCALISATION_TIMEOUTS: {}\nLOCALISED: {}\n",
+      L.requests, L.replies, L.timeouts, L.accepted);
   fmt::print("LOCALISED_AFTER_S: {:.3f}\nLOCALISED_AT_T_NS: {}\n", L.first_after_s, L.first_t_imu_ns);
-  fmt::print("LOCALISATION_SUBMAP_POINTS: {:.0f}\nLOCALISATION_REQUEST_BYTES: {:.0f}\nLOCALISATION_REPLY_BYTES: {:.0f}\n",
-             mean(L.points), mean(L.bytes_up), mean(L.bytes_down));
+  fmt::print(
+      "LOCALISATION_SUBMAP_POINTS: {:.0f}\nLOCALISATION_REQUEST_BYTES: {:.0f}\nLOCALISATION_REPLY_BYTES: "
+      "{:.0f}\n",
+      mean(L.points), mean(L.bytes_up), mean(L.bytes_down));
   print_ms("LOCALISATION_RTT", L.rtt_ms);
   print_ms("LOCALISATION_CLOUD", L.cloud_ms);
   fmt::print("POSES_NEVER_IN_MAP_FRAME: {}\n", r.poses_never_mapped + static_cast<int>(r.unmapped.size()));
 }
 
-/// Feeds the IMU samples up to the first one at or after t_ns (IMU clock).
-mrvs::Status feed_imu_until(mrvs::edge::VioSystem& vio, const std::vector<mrvs::io::ImuSample>& imu,
-                            std::size_t* next, mrvs::TimestampNs t_ns) {
-  while (*next < imu.size()) {
-    MRVS_RETURN_IF_ERROR(vio.feed_imu(imu[*next]));
-    if (imu[(*next)++].t_ns >= t_ns) break;
+/// Feeds the IMU samples up to the first one at or after t_ns (IMU clock), and the GNSS
+/// fixes up to t_ns (the localisation's prior region, outdoors).
+mrvs::Status feed_sensors_until(mrvs::edge::VioSystem& vio, const mrvs::io::DatasetReader& reader,
+                                std::size_t* next_imu, std::size_t* next_gnss, mrvs::TimestampNs t_ns) {
+  const auto& imu = reader.imu();
+  while (*next_imu < imu.size()) {
+    MRVS_RETURN_IF_ERROR(vio.feed_imu(imu[*next_imu]));
+    if (imu[(*next_imu)++].t_ns >= t_ns) break;
+  }
+  const auto& gnss = reader.gnss();
+  const mrvs::SE3d T_b_antenna = reader.T_b_gnss().value_or(mrvs::SE3d());
+  for (; *next_gnss < gnss.size() && gnss[*next_gnss].t_ns <= t_ns; ++*next_gnss) {
+    vio.feed_gnss(gnss[*next_gnss], T_b_antenna);
   }
   return absl::OkStatus();
 }
@@ -360,12 +379,17 @@ bool process(const Args& a, const mrvs::io::DatasetReader& reader, mrvs::edge::V
     intervals.push_back(1e-6 * static_cast<double>(frames[k].t_ns - frames[k - 1].t_ns));
   report->frame_interval_ms = quantile(intervals, 0.5);
   const mrvs::DurationNs td = reader.calibration().cameras[0].time_offset_ns;
-  std::size_t next_imu = 0;
+  std::size_t next_imu = 0, next_gnss = 0;
+  if (reader.has_gnss())
+    spdlog::info("{} GNSS fixes: the prior region of the localisation requests", reader.gnss().size());
   const auto t0 = std::chrono::steady_clock::now();
   auto last_progress = t0;
   for (std::size_t k = 0; k < n; ++k) {
     const auto& f = frames[k];
-    if (auto s = feed_imu_until(vio, reader.imu(), &next_imu, f.t_ns + td); !s.ok()) {
+    if (a.realtime) {
+      std::this_thread::sleep_until(t0 + std::chrono::nanoseconds(f.t_ns - frames.front().t_ns));
+    }
+    if (auto s = feed_sensors_until(vio, reader, &next_imu, &next_gnss, f.t_ns + td); !s.ok()) {
       fmt::print(stderr, "edge_client: error: {}\n", std::string(s.message()));
       return false;
     }

@@ -6,7 +6,8 @@
 # private network namespace (unshare -n, lo up) when root.
 #
 # Usage: scripts/lib/map_run.sh MAP SEQUENCE OUT EDGE_CONFIG MAP_CONFIG [edge_client args...]
-# Environment: MRVS_MAP_WAIT (s the client waits for the map at start, default 20).
+# Environment: MRVS_MAP_WAIT (s the client waits for the map at start, default 20),
+# MRVS_SERVER_LOG_LEVEL (cloud_server's, default warn).
 set -euo pipefail
 [[ $# -ge 5 ]] || { sed -n '8p' "${BASH_SOURCE[0]}" >&2; exit 2; }
 map=$1 sequence=$2 out=$3 edge_config=$4 map_config=$5
@@ -28,7 +29,7 @@ trap stop_server EXIT
 trap 'exit 130' INT TERM
 
 "$bin/cloud_server" --map "$map" --dds-profile "$profile" --config "$map_config" --stats-period 0 \
-    --log-level warn >"$out/server.log" 2>&1 &
+    --log-level "${MRVS_SERVER_LOG_LEVEL:-warn}" >"$out/server.log" 2>&1 &
 server_pid=$!
 "$bin/edge_client" --dataset "$sequence" --config "$edge_config" --output "$out/trajectory.txt" \
     --dds-profile "$profile" --map-wait "${MRVS_MAP_WAIT:-20}" --threads 1 "$@" >"$out/edge.txt"

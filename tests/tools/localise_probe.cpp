@@ -9,6 +9,8 @@
 //   localise_probe --dataset SEQ --map MAP.mrvm --config config/euroc.yaml
 //                  --map-config config/map_indoor.yaml [--set ...] [--until-localised]
 // Exit codes: 0 done, 1 data error, 2 usage error.
+#include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 
@@ -37,6 +39,7 @@ struct Args {
   std::string dataset, map, config, map_config;
   std::vector<std::string> overrides, map_overrides;
   bool per_request = false;
+  std::string dump;
   bool until_localised = false;
   int frames = 0;
   std::string log_level = "warn";
@@ -44,20 +47,23 @@ struct Args {
 
 struct Cloud {
   std::shared_ptr<mrvs::test::InProcessCloud> service;
+  std::shared_ptr<const mrvs::localise::Localiser> localiser;
 };
 
 mrvs::StatusOr<Cloud> make_cloud(const Args& a) {
-  MRVS_ASSIGN_OR_RETURN(const auto doc, mrvs::config::load_yaml_with_overrides(a.map_config, a.map_overrides));
+  MRVS_ASSIGN_OR_RETURN(const auto doc,
+                        mrvs::config::load_yaml_with_overrides(a.map_config, a.map_overrides));
   MRVS_ASSIGN_OR_RETURN(const auto query, mrvs::config::load_options<mrvs::map::QueryOptions>(doc, "query"));
-  MRVS_ASSIGN_OR_RETURN(const auto loc, mrvs::config::load_options<mrvs::localise::LocaliserOptions>(doc, "localise"));
+  MRVS_ASSIGN_OR_RETURN(const auto loc,
+                        mrvs::config::load_options<mrvs::localise::LocaliserOptions>(doc, "localise"));
   MRVS_ASSIGN_OR_RETURN(mrvs::map::VoxelMap vm, mrvs::map::load_voxel_map(a.map));
   auto shared = std::make_shared<const mrvs::map::VoxelMap>(std::move(vm));
   MRVS_ASSIGN_OR_RETURN(auto engine, mrvs::map::QueryEngine::create(shared, query));
   MRVS_ASSIGN_OR_RETURN(auto localiser, mrvs::localise::Localiser::create(shared, loc));
   Cloud c;
+  c.localiser = std::make_shared<const mrvs::localise::Localiser>(std::move(localiser));
   c.service = std::make_shared<mrvs::test::InProcessCloud>(
-      std::make_shared<const mrvs::map::QueryEngine>(std::move(engine)),
-      std::make_shared<const mrvs::localise::Localiser>(std::move(localiser)));
+      std::make_shared<const mrvs::map::QueryEngine>(std::move(engine)), c.localiser);
   return c;
 }
 
@@ -82,30 +88,55 @@ Error pose_error(const SE3d& est, const SE3d& truth) {
           std::abs(mrvs::edge::yaw_of(est * truth.inverse())) * mrvs::kRadToDeg};
 }
 
+/// req_<seq>.txt: "TRUE" and "ANSWER" 4x4 rows of T_map_odom, "ANCHOR x y z" (odometry),
+/// then "P x y z" per point (relative to the anchor) and "V x y z count" per viewpoint.
+void dump_request(const std::string& dir, const mrvs::test::InProcessCloud::Exchange& x, const SE3d& truth) {
+  std::filesystem::create_directories(dir);
+  std::FILE* f = std::fopen(fmt::format("{}/req_{}.txt", dir, x.request.seq).c_str(), "w");
+  if (!f) return;
+  const Eigen::Matrix4d t = truth.matrix(), r = x.result.T_m_o.matrix();
+  for (int i = 0; i < 4; ++i) fmt::print(f, "TRUE {} {} {} {}\n", t(i, 0), t(i, 1), t(i, 2), t(i, 3));
+  for (int i = 0; i < 4; ++i) fmt::print(f, "ANSWER {} {} {} {}\n", r(i, 0), r(i, 1), r(i, 2), r(i, 3));
+  fmt::print(f, "ANCHOR {} {} {}\n", x.request.anchor_o.x(), x.request.anchor_o.y(), x.request.anchor_o.z());
+  for (const auto& p : x.request.points) fmt::print(f, "P {} {} {}\n", p.x(), p.y(), p.z());
+  for (const auto& v : x.request.viewpoints)
+    fmt::print(f, "V {} {} {} {}\n", v.position.x(), v.position.y(), v.position.z(), v.count);
+  std::fclose(f);
+}
+
 int run(const Args& a) {
   cv::setNumThreads(1);
   auto cfg = mrvs::config::load_yaml_with_overrides(a.config, a.overrides);
-  if (!cfg.ok()) return fmt::print(stderr, "localise_probe: {}\n", std::string(cfg.status().message())), mrvs::kExitUsageError;
+  if (!cfg.ok())
+    return fmt::print(stderr, "localise_probe: {}\n", std::string(cfg.status().message())),
+           mrvs::kExitUsageError;
   auto options = mrvs::config::load_options<mrvs::edge::EdgeOptions>(*cfg);
   auto cloud = options.ok() ? make_cloud(a) : mrvs::StatusOr<Cloud>(options.status());
-  if (!cloud.ok()) return fmt::print(stderr, "localise_probe: {}\n", std::string(cloud.status().message())), mrvs::kExitUsageError;
+  if (!cloud.ok())
+    return fmt::print(stderr, "localise_probe: {}\n", std::string(cloud.status().message())),
+           mrvs::kExitUsageError;
   mrvs::io::DatasetOptions dopt;
   dopt.path = a.dataset;
   auto data = mrvs::io::open_euroc_dataset(dopt);
   if (!data.ok() || !(*data)->has_groundtruth()) {
-    fmt::print(stderr, "localise_probe: {}\n", data.ok() ? std::string("the dataset has no ground truth") : std::string(data.status().message()));
+    fmt::print(
+        stderr, "localise_probe: {}\n",
+        data.ok() ? std::string("the dataset has no ground truth") : std::string(data.status().message()));
     return mrvs::kExitDataError;
   }
   const mrvs::io::Trajectory gt = mrvs::io::to_trajectory((*data)->groundtruth());
   const SE3d T_m_w = map_from_world(a.dataset);
   auto vio = mrvs::edge::VioSystem::create(*options, (*data)->calibration());
-  if (!vio.ok()) return fmt::print(stderr, "localise_probe: {}\n", std::string(vio.status().message())), mrvs::kExitUsageError;
+  if (!vio.ok())
+    return fmt::print(stderr, "localise_probe: {}\n", std::string(vio.status().message())),
+           mrvs::kExitUsageError;
   vio->set_map_service(cloud->service.get());
   const auto& frames = (*data)->stereo_frames();
   const auto& imu = (*data)->imu();
   const mrvs::DurationNs td = (*data)->calibration().cameras[0].time_offset_ns;
   std::map<TimestampNs, SE3d> odometry;  ///< estimator pose by camera time, odometry frame
-  std::size_t next_imu = 0;
+  std::size_t next_imu = 0, next_gnss = 0;
+  const auto& gnss = (*data)->gnss();
   TimestampNs init_ns = 0, lock_ns = 0;
   std::optional<Error> lock_error;
   const std::size_t n = a.frames > 0 ? std::min<std::size_t>(frames.size(), a.frames) : frames.size();
@@ -114,6 +145,9 @@ int run(const Args& a) {
     while (next_imu < imu.size()) {
       if (!vio->feed_imu(imu[next_imu]).ok()) break;
       if (imu[next_imu++].t_ns >= f.t_ns + td) break;
+    }
+    for (; next_gnss < gnss.size() && gnss[next_gnss].t_ns <= f.t_ns + td; ++next_gnss) {
+      vio->feed_gnss(gnss[next_gnss], (*data)->T_b_gnss().value_or(SE3d()));
     }
     cloud->service->set_now(f.t_ns);
     auto left = (*data)->load_image(0, f.left);
@@ -147,15 +181,20 @@ int run(const Args& a) {
       err_deg.push_back(e.deg);
       wrong += e.m > 0.1 || e.deg > 2.0;
     }
+    if (!a.dump.empty()) dump_request(a.dump, x, T_m_o_true);
     if (a.per_request) {
-      fmt::print("REQUEST {} t {:.2f} s points {} status '{}' fitness {:.2f} ambiguity {:.2f} error {:.3f} m {:.2f} deg "
-                 "cloud {:.0f} ms ({})\n",
-                 x.request.seq, mrvs::to_seconds(x.request.stamp_ns - init_ns), x.request.points.size(),
-                 mrvs::localisation::status_name(x.result.status), x.result.fitness, x.result.ambiguity, e.m, e.deg,
-                 x.result.time_ms, x.result.detail);
+      const auto at_truth = cloud->localiser->evaluate(x.request, T_m_o_true);
+      fmt::print(
+          "REQUEST {} t {:.2f} s points {} status '{}' fitness {:.2f} ambiguity {:.2f} blocked {:.2f} "
+          "error {:.3f} m {:.2f} deg cloud {:.0f} ms truth fitness {:.2f} blocked {:.2f} ({})\n",
+          x.request.seq, mrvs::to_seconds(x.request.stamp_ns - init_ns), x.request.points.size(),
+          mrvs::localisation::status_name(x.result.status), x.result.fitness, x.result.ambiguity,
+          x.result.blocked, e.m, e.deg, x.result.time_ms, at_truth.fitness, at_truth.blocked,
+          x.result.detail);
     }
   }
-  fmt::print("REQUESTS: {}\nANSWERS_OK: {}\nANSWERS_OK_WRONG: {}\n", cloud->service->exchanges().size(), ok, wrong);
+  fmt::print("REQUESTS: {}\nANSWERS_OK: {}\nANSWERS_OK_WRONG: {}\n", cloud->service->exchanges().size(), ok,
+             wrong);
   fmt::print("ANSWER_ERROR_M_MEDIAN: {:.4f}\nANSWER_ERROR_DEG_MEDIAN: {:.3f}\n", mrvs::quantile(err_m, 0.5),
              mrvs::quantile(err_deg, 0.5));
   fmt::print("CLOUD_MS_MEDIAN: {:.1f}\nCLOUD_MS_P95: {:.1f}\n", mrvs::quantile(cloud_ms, 0.5),
@@ -170,11 +209,14 @@ int run(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Measures the cloud's localisation on a EuRoC folder with ground truth, in process.", "localise_probe"};
+  CLI::App app{"Measures the cloud's localisation on a EuRoC folder with ground truth, in process.",
+               "localise_probe"};
   Args a;
   app.add_option("--dataset", a.dataset, "EuRoC folder with ground truth")->required();
   app.add_option("--map", a.map, "Voxel map (.mrvm)")->required()->check(CLI::ExistingFile);
-  app.add_option("--config", a.config, "Edge tuning file (config/euroc.yaml)")->required()->check(CLI::ExistingFile);
+  app.add_option("--config", a.config, "Edge tuning file (config/euroc.yaml)")
+      ->required()
+      ->check(CLI::ExistingFile);
   app.add_option("--map-config", a.map_config, "Cloud tuning file (config/map_indoor.yaml)")
       ->required()
       ->check(CLI::ExistingFile);
@@ -182,6 +224,8 @@ int main(int argc, char** argv) {
   app.add_option("--map-set", a.map_overrides, "Cloud option override, e.g. localise.inlier_m=0.08");
   app.add_option("--frames", a.frames, "Frames to run (0 = all)");
   app.add_flag("--per-request", a.per_request, "One line per localisation request");
+  app.add_option("--dump", a.dump,
+                 "Folder for one text file per request: true and answered T_map_odom, the points");
   app.add_flag("--until-localised", a.until_localised, "Stop at the first accepted answer");
   mrvs::add_log_level_option(app, a.log_level);
   if (auto exit_code = mrvs::parse_command_line(app, argc, argv, a.log_level)) return *exit_code;

@@ -47,6 +47,7 @@ class Search {
 
   std::vector<Hypothesis> take() { return std::move(kept_); }
   long long nodes() const { return nodes_; }
+  bool complete() const { return complete_; }
 
  private:
   std::size_t num_points() const { return rotated_.empty() ? 0 : rotated_.front().offsets.size(); }
@@ -63,8 +64,11 @@ class Search {
 
   /// What a window must beat to matter: the last kept hypothesis once the list is full.
   int threshold() const {
-    if (static_cast<int>(kept_.size()) < options_.max_hypotheses) return min_sum_;
-    return std::max(min_sum_, static_cast<int>(std::floor(kept_.back().score * 255.0 * num_points())));
+    const double n = 255.0 * static_cast<double>(num_points());
+    const int relative =
+        kept_.empty() ? 0 : static_cast<int>(std::floor(options_.relative_score * kept_.front().score * n));
+    if (static_cast<int>(kept_.size()) < options_.max_hypotheses) return std::max(min_sum_, relative);
+    return std::max({min_sum_, relative, static_cast<int>(std::floor(kept_.back().score * n))});
   }
 
   void descend(std::vector<Candidate>& candidates) {
@@ -72,6 +76,10 @@ class Search {
               [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
     for (const Candidate& c : candidates) {
       if (c.score <= threshold()) break;  // sorted: no later one can do better
+      if (options_.max_nodes > 0 && nodes_ >= options_.max_nodes) {
+        complete_ = false;
+        return;
+      }
       if (c.level == 0) {
         leaf(c);
         continue;
@@ -102,10 +110,13 @@ class Search {
     kept_.push_back(h);
     sort_kept();
     if (static_cast<int>(kept_.size()) > options_.max_hypotheses) kept_.pop_back();
+    const double floor_score = options_.relative_score * kept_.front().score;
+    while (kept_.size() > 1 && kept_.back().score < floor_score) kept_.pop_back();
   }
 
   void sort_kept() {
-    std::sort(kept_.begin(), kept_.end(), [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
+    std::sort(kept_.begin(), kept_.end(),
+              [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
   }
 
   const LikelihoodPyramid& grid_;
@@ -115,6 +126,7 @@ class Search {
   std::vector<Hypothesis> kept_;
   int min_sum_ = 0;
   long long nodes_ = 0;
+  bool complete_ = true;
 };
 
 }  // namespace
@@ -125,10 +137,12 @@ double yaw_difference(double a, double b) {
 }
 
 bool same_pose(const Hypothesis& a, const Hypothesis& b, const SearchOptions& options) {
-  return (a.anchor - b.anchor).norm() < options.distinct_m && yaw_difference(a.yaw, b.yaw) < options.distinct_rad;
+  return (a.anchor - b.anchor).norm() < options.distinct_m &&
+         yaw_difference(a.yaw, b.yaw) < options.distinct_rad;
 }
 
-std::vector<Hypothesis> correlative_search(const LikelihoodPyramid& grid, const std::vector<Eigen::Vector3d>& points,
+std::vector<Hypothesis> correlative_search(const LikelihoodPyramid& grid,
+                                           const std::vector<Eigen::Vector3d>& points,
                                            const SearchWindow& window, const SearchOptions& options,
                                            SearchStats* stats) {
   if (points.empty() || (window.anchor_min.array() > window.anchor_max.array()).any()) return {};
@@ -150,6 +164,7 @@ std::vector<Hypothesis> correlative_search(const LikelihoodPyramid& grid, const 
   if (stats) {
     stats->nodes = search.nodes();
     stats->yaws = yaws;
+    stats->complete = search.complete();
   }
   return search.take();
 }

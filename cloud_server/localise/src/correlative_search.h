@@ -25,25 +25,29 @@ struct SearchWindow {
 
 struct SearchOptions {
   int max_hypotheses = 4;
-  double min_score = 0.2;        ///< a pose scoring less is no hypothesis, [0, 1]
-  double distinct_m = 1.0;       ///< hypotheses closer than this ...
-  double distinct_rad = 0.17;    ///< ... and turned less than this are one
+  double min_score = 0.2;       ///< a pose scoring less is no hypothesis, [0, 1]
+  double relative_score = 0.0;  ///< ... nor one scoring less than this times the best found, [0, 1]
+  long long max_nodes = 0;  ///< stop after scoring this many windows (0: never); SearchStats::complete says
+  double distinct_m = 1.0;  ///< hypotheses closer than this ...
+  double distinct_rad = 0.17;  ///< ... and turned less than this are one
 };
 
 struct Hypothesis {
-  double yaw = 0.0;                               ///< rad, about +z
+  double yaw = 0.0;                                  ///< rad, about +z
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  ///< map-local position of the submap's anchor, m
-  double score = 0.0;                             ///< mean likelihood of the points, [0, 1]
+  double score = 0.0;                                ///< mean likelihood of the points, [0, 1]
 };
 
 struct SearchStats {
   long long nodes = 0;  ///< windows scored
   int yaws = 0;
+  bool complete = true;  ///< false: stopped at max_nodes (the hypotheses are the best found so far)
 };
 
 /// The best distinct hypotheses, best first, for `points` (gravity-aligned, relative to the
 /// anchor, m) over `window`.
-std::vector<Hypothesis> correlative_search(const LikelihoodPyramid& grid, const std::vector<Eigen::Vector3d>& points,
+std::vector<Hypothesis> correlative_search(const LikelihoodPyramid& grid,
+                                           const std::vector<Eigen::Vector3d>& points,
                                            const SearchWindow& window, const SearchOptions& options,
                                            SearchStats* stats = nullptr);
 

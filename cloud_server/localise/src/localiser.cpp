@@ -5,8 +5,6 @@
 #include <cmath>
 #include <unordered_map>
 #include <variant>
-#include <cstdio>
-#include <cstdlib>
 
 #include <fmt/format.h>
 #include <Eigen/Eigenvalues>
@@ -17,6 +15,7 @@
 #include "mrvs/core/hash.h"
 #include "mrvs/geometry/angles.h"
 #include "point_to_plane.h"
+#include "visibility.h"
 
 namespace mrvs::localise {
 
@@ -29,7 +28,8 @@ struct Localiser::Impl {
   LocaliserOptions options;
   const std::vector<map::MapPoint>* coarse = nullptr;  ///< the coarsest level's points
   std::vector<Eigen::Vector3f> coarse_points;
-  Eigen::AlignedBox3d bounds;  ///< of the map's points, map-local
+  Eigen::AlignedBox3d bounds;                 ///< of the map's points, map-local
+  std::optional<LikelihoodPyramid> map_grid;  ///< the whole map's, when it fits max_grid_cells
   MapSurface surface;
   double setup_s = 0.0;
 };
@@ -61,7 +61,8 @@ std::string check_request(const Request& q, const LocaliserOptions& o) {
     return "gravity must be a unit vector";
   }
   if (!q.anchor_o.allFinite()) return "the anchor is not finite";
-  if (q.prior && (!q.prior->centre_m.allFinite() || !(q.prior->radius_m > 0.0) || !std::isfinite(q.prior->radius_m))) {
+  if (q.prior &&
+      (!q.prior->centre_m.allFinite() || !(q.prior->radius_m > 0.0) || !std::isfinite(q.prior->radius_m))) {
     return "the prior region needs a finite centre and a radius > 0";
   }
   return {};
@@ -108,13 +109,30 @@ double horizontal_reach(const std::vector<Eigen::Vector3d>& points) {
   return r[std::min(k, r.size() - 1)];
 }
 
-
 struct Prepared {
   Eigen::Matrix3d R_g = Eigen::Matrix3d::Identity();  ///< odometry frame -> gravity-aligned
   std::vector<Eigen::Vector3d> coarse, fine;          ///< gravity-aligned, relative to the anchor
+  std::vector<SightLine> sight;                       ///< a sample of the points with a viewpoint
   double reach_m = 0.0;                               ///< horizontal, 95th percentile
   double height_m = 0.0;                              ///< largest |z|
 };
+
+/// At most max_lines points with their viewpoints, evenly spread over the request's runs.
+std::vector<SightLine> sight_lines(const Request& q, const Eigen::Matrix3d& R_g, int max_lines) {
+  std::vector<SightLine> all;
+  std::size_t next = 0;
+  for (const localisation::Viewpoint& v : q.viewpoints) {
+    const Eigen::Vector3d from = R_g * v.position.cast<double>();
+    for (std::uint32_t k = 0; k < v.count && next < q.points.size(); ++k, ++next) {
+      all.push_back({from, R_g * q.points[next].cast<double>()});
+    }
+  }
+  if (all.size() <= static_cast<std::size_t>(max_lines)) return all;
+  std::vector<SightLine> out;
+  for (int i = 0; i < max_lines; ++i)
+    out.push_back(all[static_cast<std::size_t>(i) * all.size() / max_lines]);
+  return out;
+}
 
 Prepared prepare(const Request& q, const LocaliserOptions& o) {
   Prepared p;
@@ -124,6 +142,7 @@ Prepared prepare(const Request& q, const LocaliserOptions& o) {
   for (const Eigen::Vector3f& x : q.points) aligned.push_back(p.R_g * x.cast<double>());
   p.coarse = thin(aligned, o.coarse_resolution_m, o.coarse_max_points);
   p.fine = thin(aligned, o.fine_voxel_m, o.fine_max_points);
+  p.sight = sight_lines(q, p.R_g, o.sight_lines);
   p.reach_m = horizontal_reach(p.coarse);
   for (const Eigen::Vector3d& x : p.coarse) p.height_m = std::max(p.height_m, std::abs(x.z()));
   return p;
@@ -149,10 +168,11 @@ std::variant<Region, Result> search_region(const Localiser::Impl& m, const Reque
     const Eigen::Vector3d half = Eigen::Vector3d::Constant(q.prior->radius_m);
     r.anchors = r.anchors.intersection(Eigen::AlignedBox3d(r.centre - half, r.centre + half));
     if (r.anchors.isEmpty()) {
-      return failure(LStatus::kOutsideMap, fmt::format("the prior region ({:.1f} m around [{:.1f} {:.1f} {:.1f}]) "
-                                                       "does not overlap the map",
-                                                       q.prior->radius_m, q.prior->centre_m.x(),
-                                                       q.prior->centre_m.y(), q.prior->centre_m.z()));
+      return failure(LStatus::kOutsideMap,
+                     fmt::format("the prior region ({:.1f} m around [{:.1f} {:.1f} {:.1f}]) "
+                                 "does not overlap the map",
+                                 q.prior->radius_m, q.prior->centre_m.x(), q.prior->centre_m.y(),
+                                 q.prior->centre_m.z()));
     }
   }
   const Eigen::Vector3d reach(p.reach_m + 2 * res, p.reach_m + 2 * res, p.height_m + 2 * res);
@@ -169,14 +189,24 @@ std::variant<Region, Result> search_region(const Localiser::Impl& m, const Reque
   return r;
 }
 
-struct Refined {
-  Hypothesis pose;  ///< refined yaw and anchor; score = coarse score
-  FineResult fine;
-};
+/// The coarse search's options: hypotheses kept apart by coarse_distinct_m (finer than the
+/// ambiguity's distinct_m, so that a local minimum's neighbour is refined too).
+SearchOptions search_options(const LocaliserOptions& o) {
+  SearchOptions so;
+  so.max_hypotheses = o.hypotheses;
+  so.min_score = o.coarse_min_score;
+  so.relative_score = o.coarse_relative_score;
+  so.distinct_m = o.coarse_distinct_m;
+  so.distinct_rad = o.distinct_deg * kDegToRad;
+  so.max_nodes = o.max_search_nodes;
+  return so;
+}
 
-std::vector<Refined> refine_all(const Localiser::Impl& m, const Prepared& p, const std::vector<Hypothesis>& coarse,
-                                const SearchOptions& so) {
-  const LocaliserOptions& o = m.options;
+/// Refined poses this close converged to the same place.
+constexpr double kSameM = 0.1;
+constexpr double kSameRad = 2.0 * kDegToRad;
+
+FineOptions fine_options(const LocaliserOptions& o) {
   FineOptions fo;
   fo.iterations = o.fine_iterations;
   fo.start_distance_m = o.fine_start_distance_m;
@@ -184,22 +214,42 @@ std::vector<Refined> refine_all(const Localiser::Impl& m, const Prepared& p, con
   fo.huber_m = o.huber_m;
   fo.inlier_m = o.inlier_m;
   fo.voxel_m = o.fine_resolution_m;
+  return fo;
+}
+
+struct Refined {
+  Hypothesis pose;  ///< refined yaw and anchor; score = coarse score
+  FineResult fine;
+  double blocked = 0.0;  ///< share of the lines of sight through the map's surfaces
+  /// What tells placements apart: the inliers on vertical surfaces (a floor fits anywhere at
+  /// the right height), less for every line of sight the pose makes pass through a surface.
+  double score = 0.0;
+};
+
+std::vector<Refined> refine_all(const Localiser::Impl& m, const Prepared& p, const LikelihoodPyramid& grid,
+                                const std::vector<Hypothesis>& coarse) {
+  const LocaliserOptions& o = m.options;
+  const FineOptions fo = fine_options(o);
+  SearchOptions converged;
+  converged.distinct_m = kSameM;
+  converged.distinct_rad = kSameRad;
   std::vector<Refined> out;
   for (const Hypothesis& h : coarse) {
     Refined r;
     r.fine = refine_pose(m.surface, p.fine, h.yaw, h.anchor, fo);
     r.pose = {r.fine.yaw, r.fine.anchor, h.score};
-    const auto same = std::find_if(out.begin(), out.end(), [&](const Refined& x) { return same_pose(x.pose, r.pose, so); });
+    r.blocked = blocked_share(grid, p.sight, r.pose.yaw, r.pose.anchor, o.sight_start_m, o.sight_margin_m,
+                              o.sight_margin_fraction);
+    r.score = r.fine.structure * std::max(0.0, 1.0 - o.blocked_weight * r.blocked);
+    const auto same = std::find_if(out.begin(), out.end(),
+                                   [&](const Refined& x) { return same_pose(x.pose, r.pose, converged); });
     if (same == out.end()) {
       out.push_back(r);
-    } else if (r.fine.structure > same->fine.structure) {
+    } else if (r.score > same->score) {
       *same = r;
     }
   }
-  // Ranked by what tells placements apart: the inliers on vertical surfaces (a floor fits
-  // anywhere at the right height).
-  std::sort(out.begin(), out.end(),
-            [](const Refined& a, const Refined& b) { return a.fine.structure > b.fine.structure; });
+  std::sort(out.begin(), out.end(), [](const Refined& a, const Refined& b) { return a.score > b.score; });
   return out;
 }
 
@@ -218,15 +268,23 @@ std::optional<Mat6d> covariance(const FineResult& f, double inflation) {
   return c;
 }
 
-Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p, const std::vector<Refined>& refined) {
+Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p,
+               const std::vector<Refined>& refined) {
   const LocaliserOptions& o = m.options;
   const Refined& best = refined.front();
   Result r;
   r.hypotheses = static_cast<int>(refined.size());
   r.fitness = best.fine.fitness;
+  r.blocked = best.blocked;
   r.rmse_m = best.fine.rmse_m;
-  r.ambiguity =
-      refined.size() > 1 && best.fine.structure > 0 ? refined[1].fine.structure / best.fine.structure : 0.0;
+  // The alternative: the best refined pose distinct from the best one (a neighbour within
+  // distinct_m is the same place, a local minimum of the fine stage).
+  SearchOptions distinct;
+  distinct.distinct_m = o.distinct_m;
+  distinct.distinct_rad = o.distinct_deg * kDegToRad;
+  const auto alt = std::find_if(refined.begin() + 1, refined.end(),
+                                [&](const Refined& x) { return !same_pose(x.pose, best.pose, distinct); });
+  r.ambiguity = alt != refined.end() && best.score > 0 ? alt->score / best.score : 0.0;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(best.pose.yaw, Eigen::Vector3d::UnitZ()) * p.R_g;
   const Eigen::Vector3d anchor_m = best.pose.anchor + m.map->origin;
   r.T_m_o = SE3d(Quatd(R).normalized(), anchor_m - R * q.anchor_o);
@@ -237,7 +295,8 @@ Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p, co
     return r;
   }
   const std::optional<Mat6d> cov = covariance(best.fine, o.covariance_inflation);
-  const double sigma_m = cov ? std::sqrt(cov->topLeftCorner<3, 3>().eigenvalues().real().maxCoeff()) : INFINITY;
+  const double sigma_m =
+      cov ? std::sqrt(cov->topLeftCorner<3, 3>().eigenvalues().real().maxCoeff()) : INFINITY;
   const double sigma_deg = cov ? std::sqrt((*cov)(5, 5)) * kRadToDeg : INFINITY;
   if (cov) r.covariance = *cov;
   if (!(sigma_m <= o.max_sigma_m) || !(sigma_deg <= o.max_sigma_deg)) {
@@ -248,15 +307,67 @@ Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p, co
   }
   if (r.ambiguity > o.max_ambiguity) {
     r.status = LStatus::kAmbiguous;
-    r.detail = fmt::format("another pose {:.2f} m / {:.1f} deg away fits {:.0f} % as well", 
-                           (refined[1].pose.anchor - best.pose.anchor).norm(),
-                           yaw_difference(refined[1].pose.yaw, best.pose.yaw) * kRadToDeg, 100 * r.ambiguity);
+    r.detail = fmt::format(
+        "another pose {:.2f} m / {:.1f} deg away fits {:.0f} % as well (lines of sight blocked: {:.0f} % vs "
+        "{:.0f} %)",
+        (alt->pose.anchor - best.pose.anchor).norm(),
+        yaw_difference(alt->pose.yaw, best.pose.yaw) * kRadToDeg, 100 * r.ambiguity, 100 * alt->blocked,
+        100 * best.blocked);
     return r;
   }
   r.status = LStatus::kOk;
-  r.detail = fmt::format("fitness {:.2f}, rmse {:.3f} m, ambiguity {:.2f}, sd {:.3f} m / {:.2f} deg", r.fitness,
-                         r.rmse_m, r.ambiguity, sigma_m, sigma_deg);
+  r.detail = fmt::format(
+      "fitness {:.2f}, rmse {:.3f} m, ambiguity {:.2f}, sd {:.3f} m / {:.2f} deg, {:.0f} % of the "
+      "lines of sight blocked",
+      r.fitness, r.rmse_m, r.ambiguity, sigma_m, sigma_deg, 100 * best.blocked);
   return r;
+}
+
+/// The pyramid levels for an anchor box: enough that the top level's windows are few.
+int pyramid_levels(const Eigen::AlignedBox3d& anchors, const LocaliserOptions& o) {
+  const double extent_cells = (anchors.sizes() / o.coarse_resolution_m).maxCoeff();
+  return std::clamp(1 + static_cast<int>(std::ceil(std::log2(std::max(extent_cells, 1.0)))), 1,
+                    o.branch_levels);
+}
+
+/// The coarse stage's grid (also the free-space check's): the whole map's, made once, when
+/// the request has no prior region; else made for the region.
+struct SearchGrid {
+  Region region;
+  std::optional<LikelihoodPyramid> built;
+  const LikelihoodPyramid* shared = nullptr;  ///< the map's own (when nothing was built)
+  const LikelihoodPyramid& get() const { return built ? *built : *shared; }
+};
+
+std::variant<SearchGrid, Result> search_grid(const Localiser::Impl& m, const Request& q, const Prepared& p) {
+  const LocaliserOptions& o = m.options;
+  auto region = search_region(m, q, p);
+  if (auto* fail = std::get_if<Result>(&region)) return *fail;
+  SearchGrid g;
+  g.region = std::get<Region>(region);
+  if (q.prior || !m.map_grid) {
+    g.built = LikelihoodPyramid::build(m.coarse_points, g.region.grid, o.coarse_resolution_m,
+                                       pyramid_levels(g.region.anchors, o), 1.0);
+  }
+  if (!g.built) g.shared = &*m.map_grid;
+  return g;
+}
+
+/// The coarse stage: the best distinct hypotheses (empty: none good enough).
+std::vector<Hypothesis> coarse_search(const LocaliserOptions& o, const SearchGrid& g, const Prepared& p,
+                                      SearchStats* stats) {
+  const double res = o.coarse_resolution_m;
+  SearchWindow w;
+  w.anchor_min = g.get().cell_of(g.region.anchors.min());
+  w.anchor_max = g.get().cell_of(g.region.anchors.max());
+  w.radius_m = g.region.radius_m;
+  w.centre = g.region.centre;
+  w.yaw_step_rad =
+      o.yaw_step_deg > 0
+          ? o.yaw_step_deg * kDegToRad
+          : std::clamp(std::acos(1.0 - 0.5 * res * res / std::max(p.reach_m * p.reach_m, res * res)),
+                       0.2 * kDegToRad, 10.0 * kDegToRad);
+  return correlative_search(g.get(), p.coarse, w, search_options(o), stats);
 }
 
 Result run(const Localiser::Impl& m, const Request& q) {
@@ -267,43 +378,25 @@ Result run(const Localiser::Impl& m, const Request& q) {
     return failure(LStatus::kTooLittleStructure,
                    fmt::format("the submap covers {} cells of {} m", p.coarse.size(), o.coarse_resolution_m));
   }
-  auto region = search_region(m, q, p);
-  if (auto* fail = std::get_if<Result>(&region)) return *fail;
-  const Region& reg = std::get<Region>(region);
-  const double res = o.coarse_resolution_m;
-  const double extent_cells = (reg.anchors.sizes() / res).maxCoeff();
-  const int levels = std::clamp(1 + static_cast<int>(std::ceil(std::log2(std::max(extent_cells, 1.0)))), 1,
-                                o.branch_levels);
-  const LikelihoodPyramid grid = LikelihoodPyramid::build(m.coarse_points, reg.grid, res, levels, 1.0);
-  SearchWindow w;
-  w.anchor_min = grid.cell_of(reg.anchors.min());
-  w.anchor_max = grid.cell_of(reg.anchors.max());
-  w.radius_m = reg.radius_m;
-  w.centre = reg.centre;
-  w.yaw_step_rad = o.yaw_step_deg > 0
-                       ? o.yaw_step_deg * kDegToRad
-                       : std::clamp(std::acos(1.0 - 0.5 * res * res / std::max(p.reach_m * p.reach_m, res * res)),
-                                    0.2 * kDegToRad, 10.0 * kDegToRad);
-  SearchOptions so;
-  so.max_hypotheses = o.hypotheses;
-  so.min_score = o.coarse_min_score;
-  so.distinct_m = o.distinct_m;
-  so.distinct_rad = o.distinct_deg * kDegToRad;
-  const std::vector<Hypothesis> coarse = correlative_search(grid, p.coarse, w, so);
+  auto grid = search_grid(m, q, p);
+  if (auto* fail = std::get_if<Result>(&grid)) return *fail;
+  const SearchGrid& g = std::get<SearchGrid>(grid);
+  SearchStats stats;
+  const std::vector<Hypothesis> coarse = coarse_search(o, g, p, &stats);
+  if (!stats.complete) {
+    // The best of what was searched is no answer: a better pose may lie in what was not.
+    return failure(
+        LStatus::kAmbiguous,
+        fmt::format("the search stopped after {} windows (localise.max_search_nodes): too many poses fit "
+                    "about equally",
+                    stats.nodes));
+  }
   if (coarse.empty()) {
-    return failure(LStatus::kOutsideMap, fmt::format("no pose puts {:.0f} % of the submap near the map's surfaces",
-                                                     100 * o.coarse_min_score));
+    return failure(
+        LStatus::kOutsideMap,
+        fmt::format("no pose puts {:.0f} % of the submap near the map's surfaces", 100 * o.coarse_min_score));
   }
-  auto ref = refine_all(m, p, coarse, so);
-  if (getenv("LOCDBG")) {
-    static int cnt = 0; ++cnt;
-    FILE* f = fopen(fmt::format("/tmp/loc/dbg_{}.txt", cnt).c_str(), "w");
-    for (auto& h : coarse) fprintf(f, "C %.4f %.3f %.3f %.3f %.3f\n", h.yaw, h.anchor.x(), h.anchor.y(), h.anchor.z(), h.score);
-    for (auto& h : ref) fprintf(f, "F %.4f %.3f %.3f %.3f %.3f %.3f\n", h.pose.yaw, h.pose.anchor.x(), h.pose.anchor.y(), h.pose.anchor.z(), h.fine.fitness, h.fine.structure);
-    for (auto& x : p.fine) fprintf(f, "P %.3f %.3f %.3f\n", x.x(), x.y(), x.z());
-    fclose(f);
-  }
-  return verdict(m, q, p, ref);
+  return verdict(m, q, p, refine_all(m, p, g.get(), coarse));
 }
 
 }  // namespace
@@ -316,8 +409,8 @@ StatusOr<Localiser> Localiser::create(std::shared_ptr<const map::VoxelMap> map, 
   const int fine = map->level_of(o.fine_resolution_m);
   if (fine < 0) {
     return absl::InvalidArgumentError(
-        fmt::format("localise.fine_resolution_m {} is not a level of the map (levels: {} m)", o.fine_resolution_m,
-                    fmt::join(map->resolutions(), ", ")));
+        fmt::format("localise.fine_resolution_m {} is not a level of the map (levels: {} m)",
+                    o.fine_resolution_m, fmt::join(map->resolutions(), ", ")));
   }
   const auto t0 = Clock::now();
   auto impl = std::make_shared<Impl>();
@@ -329,8 +422,18 @@ StatusOr<Localiser> Localiser::create(std::shared_ptr<const map::VoxelMap> map, 
   }
   std::vector<Eigen::Vector3f> fine_points;
   fine_points.reserve(map->levels[static_cast<std::size_t>(fine)].points.size());
-  for (const map::MapPoint& p : map->levels[static_cast<std::size_t>(fine)].points) fine_points.push_back(p.position);
+  for (const map::MapPoint& p : map->levels[static_cast<std::size_t>(fine)].points)
+    fine_points.push_back(p.position);
   impl->surface = MapSurface::build(std::move(fine_points), o.normal_knn, o.normal_max_rms_m);
+  const double res = o.coarse_resolution_m;
+  const Eigen::AlignedBox3d whole(impl->bounds.min() - Eigen::Vector3d::Constant(2 * res),
+                                  impl->bounds.max() + Eigen::Vector3d::Constant(2 * res));
+  if ((whole.sizes() / res).array().ceil().prod() <= static_cast<double>(o.max_grid_cells)) {
+    const Eigen::AlignedBox3d anchors(impl->bounds.min() - Eigen::Vector3d::Constant(res),
+                                      impl->bounds.max() + Eigen::Vector3d::Constant(res));
+    impl->map_grid =
+        LikelihoodPyramid::build(impl->coarse_points, whole, res, pyramid_levels(anchors, o), 1.0);
+  }
   impl->setup_s = ms_since(t0) * 1e-3;
   Localiser l;
   l.impl_ = std::move(impl);
@@ -341,6 +444,28 @@ localisation::Result Localiser::localise(const Request& request) const {
   const auto t0 = Clock::now();
   Result r = run(*impl_, request);
   r.time_ms = ms_since(t0);
+  return r;
+}
+
+localisation::Result Localiser::evaluate(const Request& q, const SE3d& T_m_o) const {
+  const Impl& m = *impl_;
+  const Prepared p = prepare(q, m.options);
+  // T_m_o = [R_z(yaw) R_g | anchor_m - R anchor_o]: the yaw and the anchor's map-local position.
+  const Eigen::Matrix3d R = T_m_o.rotation_matrix() * p.R_g.transpose();
+  const double yaw = std::atan2(R(1, 0) - R(0, 1), R(0, 0) + R(1, 1));
+  const Eigen::Vector3d anchor = T_m_o * q.anchor_o - m.map->origin;
+  FineOptions fo = fine_options(m.options);
+  fo.iterations = 0;
+  Result r;
+  const FineResult f = refine_pose(m.surface, p.fine, yaw, anchor, fo);
+  r.status = LStatus::kOk;
+  r.T_m_o = T_m_o;
+  r.fitness = f.fitness;
+  r.rmse_m = f.rmse_m;
+  if (m.map_grid) {
+    r.blocked = blocked_share(*m.map_grid, p.sight, yaw, anchor, m.options.sight_start_m,
+                              m.options.sight_margin_m, m.options.sight_margin_fraction);
+  }
   return r;
 }
 

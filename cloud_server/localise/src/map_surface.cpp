@@ -13,7 +13,9 @@ struct MapSurface::Index {
     const Eigen::Vector3f* points = nullptr;
     std::size_t size = 0;
     std::size_t kdtree_get_point_count() const { return size; }
-    float kdtree_get_pt(std::size_t i, std::size_t dim) const { return points[i][static_cast<Eigen::Index>(dim)]; }
+    float kdtree_get_pt(std::size_t i, std::size_t dim) const {
+      return points[i][static_cast<Eigen::Index>(dim)];
+    }
     template <class Box>
     bool kdtree_get_bbox(Box&) const {
       return false;
@@ -60,7 +62,8 @@ std::optional<Neighbour> MapSurface::nearest(const Eigen::Vector3f& q, float max
   if (!index_) return std::nullopt;
   std::uint32_t i = 0;
   float d2 = 0.0f;
-  if (index_->tree.knnSearch(q.data(), 1, &i, &d2) != 1 || d2 > max_distance_m * max_distance_m) return std::nullopt;
+  if (index_->tree.knnSearch(q.data(), 1, &i, &d2) != 1 || d2 > max_distance_m * max_distance_m)
+    return std::nullopt;
   return Neighbour{i, std::sqrt(d2)};
 }
 

@@ -36,7 +36,8 @@ Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3
     const Eigen::Vector3d n = surface.normal(nb->index).cast<double>();
     const bool planar = n.squaredNorm() > 0.5;
     const double r = planar ? n.dot(x - surface.point(nb->index).cast<double>()) : 0.0;
-    const bool inlier = planar ? nb->distance_m <= reach && std::abs(r) <= o.inlier_m : nb->distance_m <= o.inlier_m;
+    const bool inlier =
+        planar ? nb->distance_m <= reach && std::abs(r) <= o.inlier_m : nb->distance_m <= o.inlier_m;
     L.inliers += inlier;
     if (!planar || nb->distance_m > max_distance) continue;
     Row4 J;
@@ -62,9 +63,9 @@ FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vecto
   FineResult out;
   out.yaw = yaw;
   out.anchor = anchor;
-  const int n = std::max(1, o.iterations);
+  const int n = std::max(0, o.iterations);  // 0: only evaluate the start
   for (int it = 0; it < n; ++it) {
-    const double s = n > 1 ? std::min(1.0, static_cast<double>(it) / (0.7 * (n - 1))) : 1.0;
+    const double s = n > 1 ? std::min(1.0, static_cast<double>(it) / (0.5 * (n - 1))) : 1.0;
     const double dist = o.start_distance_m + s * (o.end_distance_m - o.start_distance_m);
     const Linearised L = linearise(surface, points, out.yaw, out.anchor, dist, o);
     if (L.used < 4) break;

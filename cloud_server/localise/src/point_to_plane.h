@@ -35,7 +35,7 @@ struct FineResult {
   /// The same count weighted by how much each inlier fixes the horizontal pose, |n_xy| of its
   /// map normal (1 on walls, 0 on floors), per point: what tells two placements apart.
   double structure = 0.0;
-  double rmse_m = 0.0;   ///< point-to-plane rms of the inliers with a normal
+  double rmse_m = 0.0;  ///< point-to-plane rms of the inliers with a normal
   /// sum of J^T J over the inliers with a normal (unit weights), order [anchor; yaw]
   Eigen::Matrix4d information = Eigen::Matrix4d::Zero();
   int inliers = 0;

@@ -79,19 +79,22 @@ mrvs::StatusOr<ServerOptions> load_server_options(const Args& a) {
                         mrvs::config::load_yaml_with_overrides(a.config, a.overrides));
   ServerOptions o;
   MRVS_ASSIGN_OR_RETURN(o.query, mrvs::config::load_options<mrvs::map::QueryOptions>(doc, "query"));
-  MRVS_ASSIGN_OR_RETURN(o.localise, mrvs::config::load_options<mrvs::localise::LocaliserOptions>(doc, "localise"));
+  MRVS_ASSIGN_OR_RETURN(o.localise,
+                        mrvs::config::load_options<mrvs::localise::LocaliserOptions>(doc, "localise"));
   return o;
 }
 
 /// The localiser over `map`, or nullptr with --no-localisation.
 mrvs::StatusOr<std::shared_ptr<const mrvs::localise::Localiser>> make_localiser(
-    const Args& a, std::shared_ptr<const mrvs::map::VoxelMap> map, const mrvs::localise::LocaliserOptions& o) {
+    const Args& a, std::shared_ptr<const mrvs::map::VoxelMap> map,
+    const mrvs::localise::LocaliserOptions& o) {
   if (a.no_localisation) {
     spdlog::info("localisation service off (--no-localisation)");
     return std::shared_ptr<const mrvs::localise::Localiser>();
   }
   spdlog::info("localise options:\n{}", mrvs::config::options_to_yaml(o, "localise"));
-  MRVS_ASSIGN_OR_RETURN(mrvs::localise::Localiser localiser, mrvs::localise::Localiser::create(std::move(map), o));
+  MRVS_ASSIGN_OR_RETURN(mrvs::localise::Localiser localiser,
+                        mrvs::localise::Localiser::create(std::move(map), o));
   spdlog::info("localisation service ready ({:.1f} s to index the {} m level)", localiser.setup_s(),
                o.fine_resolution_m);
   return std::make_shared<const mrvs::localise::Localiser>(std::move(localiser));

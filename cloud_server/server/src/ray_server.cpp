@@ -151,8 +151,8 @@ void RayServer::log_counters() const {
   }
   if (!localisation_) return;
   for (const auto& [id, c] : localisation_->counters()) {
-    spdlog::info("client {}: {} localisation requests ({} answered ok), {} B in, {} B out, last {:.0f} ms", id,
-                 c.requests, c.answered_ok, c.bytes_in, c.bytes_out, c.last_time_ms);
+    spdlog::info("client {}: {} localisation requests ({} answered ok), {} B in, {} B out, last {:.0f} ms",
+                 id, c.requests, c.answered_ok, c.bytes_in, c.bytes_out, c.last_time_ms);
   }
 }
 

@@ -32,6 +32,7 @@ struct Args {
   std::string align = "all";
   std::string log_level = "info";
   std::string json_path;
+  long long at_ns = -1;
 };
 
 void add_options(CLI::App& app, Args& args) {
@@ -66,6 +67,10 @@ void add_options(CLI::App& app, Args& args) {
       ->check(CLI::IsMember({"all", "se3", "sim3", "first", "none"}));
   mrvs::add_log_level_option(app, args.log_level);
   app.add_option("--json", args.json_path, "Also write every figure as JSON to this file");
+  app.add_option(
+      "--at", args.at_ns,
+      "Also the error of the one estimate pose at this time (ns; e.g. the edge's LOCALISED_AT_T_NS): "
+      "POSE_ERROR_AT_M, POSE_ERROR_AT_DEG, POSE_HEADING_ERROR_AT_DEG, no alignment");
   app.footer(
       "Output: a human-readable summary, then machine-readable lines 'KEY: value': MATCHED_POSES, "
       "UNMATCHED_POSES, ATE_RMSE_m and ATE_ROT_RMSE_deg (unaligned), ATE_RMSE_SE3_m, ATE_ROT_RMSE_SE3_deg, "
@@ -97,6 +102,29 @@ mrvs::StatusOr<mrvs::io::Trajectory> read_input(const std::string& path, const c
   }
   spdlog::info("read {} poses from {} trajectory {}", trajectory->size(), what, path);
   return trajectory;
+}
+
+/// The unaligned error of the estimate pose at t_ns (the nearest within the association's
+/// tolerance) against the ground truth there.
+mrvs::Status print_error_at(const mrvs::io::Trajectory& est, const mrvs::io::Trajectory& gt,
+                            mrvs::TimestampNs t_ns, const mrvs::eval::AssociationOptions& association) {
+  const auto it = std::min_element(est.begin(), est.end(), [&](const auto& a, const auto& b) {
+    return std::llabs(a.t_ns - t_ns) < std::llabs(b.t_ns - t_ns);
+  });
+  if (it == est.end() || std::llabs(it->t_ns - t_ns) > association.max_dt_ns) {
+    return absl::NotFoundError("no estimate pose within --max-dt of that time");
+  }
+  MRVS_ASSIGN_OR_RETURN(const auto matched, mrvs::eval::associate({*it}, gt, association));
+  const mrvs::eval::Match& m = matched.matches.front();
+  const mrvs::SE3d d = m.T_wgt_b.inverse() * m.T_west_b;
+  const mrvs::Mat3d R = m.T_west_b.rotation_matrix() * m.T_wgt_b.rotation_matrix().transpose();
+  const double heading = std::atan2(R(1, 0) - R(0, 1), R(0, 0) + R(1, 1));
+  fmt::print(
+      "POSE_AT_T_NS: {}\nPOSE_ERROR_AT_M: {:.6f}\nPOSE_ERROR_AT_DEG: {:.4f}\nPOSE_HEADING_ERROR_AT_DEG: "
+      "{:.4f}\n",
+      it->t_ns, (m.T_west_b.translation() - m.T_wgt_b.translation()).norm(),
+      Eigen::AngleAxisd(d.quaternion()).angle() * 180.0 / M_PI, heading * 180.0 / M_PI);
+  return absl::OkStatus();
 }
 
 int run(const Args& args) {
@@ -131,6 +159,12 @@ int run(const Args& args) {
                  report->num_estimate_poses, args.max_dt_s);
   }
   fmt::print("{}\n{}", mrvs::eval::format_summary(*report), mrvs::eval::format_key_values(*report));
+  if (args.at_ns >= 0) {
+    if (auto s = print_error_at(*est, *gt, args.at_ns, options.association); !s.ok()) {
+      fmt::print(stderr, "evaluate_trajectory: error: --at {}: {}\n", args.at_ns, std::string(s.message()));
+      return mrvs::kExitDataError;
+    }
+  }
   std::fflush(stdout);
   if (!args.json_path.empty()) {
     std::ofstream out(args.json_path);

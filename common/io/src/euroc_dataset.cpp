@@ -188,7 +188,8 @@ class EurocDataset final : public DatasetReader {
 
 Status EurocDataset::open(const DatasetOptions& options) {
   MRVS_ASSIGN_OR_RETURN(const std::filesystem::path mav0, find_mav0(options.path));
-  MRVS_RETURN_IF_ERROR(read_streams(mav0, options.policy, options.check_image_files, options.read_groundtruth));
+  MRVS_RETURN_IF_ERROR(
+      read_streams(mav0, options.policy, options.check_image_files, options.read_groundtruth));
   MRVS_RETURN_IF_ERROR(load_calibration(mav0, options));
   MRVS_RETURN_IF_ERROR(read_gnss(mav0, options.policy));
   MRVS_RETURN_IF_ERROR(pair_stereo(options.stereo_tolerance_ns));
@@ -197,8 +198,8 @@ Status EurocDataset::open(const DatasetOptions& options) {
   return absl::OkStatus();
 }
 
-Status EurocDataset::read_streams(const std::filesystem::path& mav0, const ReadPolicy& policy, bool check_files,
-                                  bool read_groundtruth) {
+Status EurocDataset::read_streams(const std::filesystem::path& mav0, const ReadPolicy& policy,
+                                  bool check_files, bool read_groundtruth) {
   for (std::size_t cam = 0; cam < 2; ++cam) {
     const std::filesystem::path folder = mav0 / fmt::format("cam{}", cam);
     MRVS_RETURN_IF_ERROR(require_file(folder / "data.csv", "image list"));

@@ -96,7 +96,9 @@ double yaw_of(const SE3d& T) {
   return std::atan2(R(1, 0) - R(0, 1), R(0, 0) + R(1, 1));
 }
 
-SE3d yaw_only(const SE3d& T) { return SE3d(Quatd(Eigen::AngleAxisd(yaw_of(T), Vec3d::UnitZ())), T.translation()); }
+SE3d yaw_only(const SE3d& T) {
+  return SE3d(Quatd(Eigen::AngleAxisd(yaw_of(T), Vec3d::UnitZ())), T.translation());
+}
 
 Eigen::MatrixXd gauge_directions(const State& state, const Vec3d& pivot) {
   const Vec3d z = Vec3d::UnitZ();

@@ -1,6 +1,7 @@
 #include "mrvs/edge/map_localiser.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 
@@ -9,6 +10,7 @@
 #include <Eigen/Cholesky>
 
 #include "mrvs/core/hash.h"
+#include "mrvs/core/stats.h"
 #include "mrvs/edge/global_alignment.h"
 #include "mrvs/geometry/angles.h"
 
@@ -41,7 +43,25 @@ Eigen::Matrix4d covariance_at(const Alignment& a, const Vec3d& x_m) {
 
 }  // namespace
 
-MapLocaliser::MapLocaliser(const LocalisationOptions& options) : options_(options), window_s_(options.window_s) {}
+std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix>& fixes, TimestampNs t_ns,
+                                                    double window_s, double lever_arm_m,
+                                                    const LocalisationOptions& o) {
+  std::array<std::vector<double>, 3> axes;
+  double sigma = 0.0;
+  for (const io::GnssFix& f : fixes) {
+    if (f.t_ns > t_ns || f.t_ns < t_ns - from_seconds(window_s)) continue;
+    for (int k = 0; k < 3; ++k) axes[static_cast<std::size_t>(k)].push_back(f.p_map[k]);
+    sigma = std::max({sigma, f.sigma_horizontal_m, f.sigma_vertical_m});
+  }
+  if (axes[0].empty()) return std::nullopt;
+  localisation::PriorRegion prior;
+  for (int k = 0; k < 3; ++k) prior.centre_m[k] = quantile(axes[static_cast<std::size_t>(k)], 0.5);
+  prior.radius_m = o.gnss_sigmas * sigma + lever_arm_m + o.gnss_margin_m;
+  return prior;
+}
+
+MapLocaliser::MapLocaliser(const LocalisationOptions& options)
+    : options_(options), window_s_(options.window_s) {}
 
 void MapLocaliser::reset() {
   dense_.clear();
@@ -56,52 +76,75 @@ void MapLocaliser::reset() {
   status_ = "restarted";
 }
 
-void MapLocaliser::add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o) {
-  if (!points_o.empty()) dense_.emplace_back(t_ns, points_o);
+void MapLocaliser::add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o,
+                              const Vec3d& viewpoint_o) {
+  if (!points_o.empty()) dense_.emplace_back(Seen{t_ns, viewpoint_o}, points_o);
   last_dense_ns_ = t_ns;
 }
 
-void MapLocaliser::set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o) { tracks_[id] = {t_ns, p_o}; }
+void MapLocaliser::set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o,
+                                   const Vec3d& viewpoint_o) {
+  if (options_.submap_source == "dense_stereo") return;
+  tracks_[id] = {Seen{t_ns, viewpoint_o}, p_o};
+}
 
 bool MapLocaliser::wants_dense(TimestampNs t_ns) const {
-  return options_.submap_source == "dense_stereo" &&
+  return options_.submap_source != "tracks" &&
          (last_dense_ns_ == 0 || t_ns - last_dense_ns_ >= from_seconds(options_.dense_interval_s));
 }
 
 void MapLocaliser::forget_before(TimestampNs t_ns) {
-  while (!dense_.empty() && dense_.front().first < t_ns) dense_.pop_front();
-  for (auto it = tracks_.begin(); it != tracks_.end();) it = it->second.first < t_ns ? tracks_.erase(it) : ++it;
+  while (!dense_.empty() && dense_.front().first.t_ns < t_ns) dense_.pop_front();
+  for (auto it = tracks_.begin(); it != tracks_.end();) {
+    it = it->second.first.t_ns < t_ns ? tracks_.erase(it) : std::next(it);
+  }
 }
 
-std::optional<localisation::Request> MapLocaliser::build_request(TimestampNs t_ns, const Vec3d& anchor_o) const {
+std::optional<localisation::Request> MapLocaliser::build_request(TimestampNs t_ns,
+                                                                 const Vec3d& anchor_o) const {
   const TimestampNs from = t_ns - from_seconds(window_s_);
-  std::unordered_map<std::uint64_t, std::pair<Vec3d, int>> cells;
-  std::vector<std::uint64_t> order;
-  auto add = [&](const Vec3d& p) {
-    if (!p.allFinite() || (p - anchor_o).norm() > options_.max_range_m) return;
-    auto [it, fresh] = cells.try_emplace(cell_key(p, options_.voxel_m), Vec3d::Zero(), 0);
-    if (fresh) order.push_back(it->first);
-    it->second.first += p;
-    ++it->second.second;
+  const DurationNs bucket = std::max<DurationNs>(1, from_seconds(options_.viewpoint_interval_s));
+  // One point per cell (the mean of what fell in it), seen from its first point's viewpoint:
+  // one per viewpoint_interval_s of the window.
+  struct Cell {
+    Vec3d sum = Vec3d::Zero();
+    int count = 0;
+    std::int64_t view = 0;
   };
-  for (const auto& [t, pts] : dense_) {
-    if (t < from) continue;
-    for (const Vec3d& p : pts) add(p);
+  std::unordered_map<std::uint64_t, Cell> cells;
+  std::vector<std::uint64_t> order;
+  std::map<std::int64_t, Vec3d> views;
+  auto add = [&](const Seen& seen, const Vec3d& p) {
+    if (seen.t_ns < from || !p.allFinite() || (p - anchor_o).norm() > options_.max_range_m) return;
+    const std::int64_t view = (seen.t_ns - from) / bucket;
+    views.try_emplace(view, seen.viewpoint_o);
+    auto [it, fresh] = cells.try_emplace(cell_key(p, options_.voxel_m), Cell{Vec3d::Zero(), 0, view});
+    if (fresh) order.push_back(it->first);
+    it->second.sum += p;
+    ++it->second.count;
+  };
+  for (const auto& [seen, pts] : dense_) {
+    for (const Vec3d& p : pts) add(seen, p);
   }
-  for (const auto& [id, tp] : tracks_) {
-    if (tp.first >= from) add(tp.second);
-  }
+  for (const auto& [id, sp] : tracks_) add(sp.first, sp.second);
   if (static_cast<int>(order.size()) < options_.min_points) return std::nullopt;
+  // At most max_points, evenly spread, then grouped by viewpoint (the wire's order).
+  const std::size_t n = order.size();
+  const std::size_t m = std::min<std::size_t>(n, static_cast<std::size_t>(options_.max_points));
+  std::map<std::int64_t, std::vector<Vec3d>> by_view;
+  for (std::size_t i = 0; i < m; ++i) {
+    const Cell& c = cells.at(order[i * n / m]);
+    by_view[c.view].push_back(c.sum / c.count);
+  }
   localisation::Request q;
   q.stamp_ns = t_ns;
   q.anchor_o = anchor_o;
   q.gravity_o = Vec3d(0, 0, -1);  // the filter's world frame is gravity-aligned
-  const std::size_t n = order.size();
-  const std::size_t m = std::min<std::size_t>(n, static_cast<std::size_t>(options_.max_points));
   q.points.reserve(m);
-  for (std::size_t i = 0; i < m; ++i) {
-    const auto& [sum, count] = cells.at(order[i * n / m]);
-    q.points.push_back((sum / count - anchor_o).cast<float>());
+  for (const auto& [view, pts] : by_view) {
+    for (const Vec3d& p : pts) q.points.push_back((p - anchor_o).cast<float>());
+    q.viewpoints.push_back(
+        {(views.at(view) - anchor_o).cast<float>(), static_cast<std::uint32_t>(pts.size())});
   }
   return q;
 }
@@ -115,7 +158,8 @@ std::optional<Alignment> MapLocaliser::step(TimestampNs t_ns, const Vec3d& ancho
   }
   forget_before(t_ns - from_seconds(options_.max_window_s));
   for (const LocalisationReply& reply : service.poll_localisation()) {
-    if (!pending_ || reply.seq != pending_->seq) continue;  // stale (a request given up on, or before a restart)
+    if (!pending_ || reply.seq != pending_->seq)
+      continue;  // stale (a request given up on, or before a restart)
     if (auto accepted = handle(reply, stats)) return accepted;
   }
   if (pending_ && Clock::now() - pending_->sent > std::chrono::duration<double>(options_.timeout_s)) {
@@ -143,7 +187,7 @@ std::optional<Alignment> MapLocaliser::step(TimestampNs t_ns, const Vec3d& ancho
     status_ = fmt::format("localisation request not sent: {}", std::string(sent.status().message()));
     return std::nullopt;
   }
-  pending_ = Pending{q->seq, t_ns, anchor_o, Clock::now()};
+  pending_ = Pending{q->seq, t_ns - from_seconds(window_s_), t_ns, anchor_o, Clock::now()};
   ++requests_;
   ++stats->requests;
   stats->bytes_up += *sent;
@@ -169,24 +213,34 @@ std::optional<Alignment> MapLocaliser::handle(const LocalisationReply& reply, Lo
   stats->cloud_ms = r.time_ms;
   stats->reply = fmt::format("{}: {}", localisation::status_name(r.status), r.detail);
   if (r.status != Status::kOk) {
-    refuse(fmt::format("the cloud answered request {} '{}' ({})", p.seq, localisation::status_name(r.status), r.detail));
+    refuse(fmt::format("the cloud answered request {} '{}' ({})", p.seq, localisation::status_name(r.status),
+                       r.detail));
     return std::nullopt;
   }
   if (r.ambiguity > options_.max_ambiguity) {
-    refuse(fmt::format("answer {} is ambiguous ({:.2f} > {:.2f})", p.seq, r.ambiguity, options_.max_ambiguity));
+    refuse(
+        fmt::format("answer {} is ambiguous ({:.2f} > {:.2f})", p.seq, r.ambiguity, options_.max_ambiguity));
     return std::nullopt;
   }
-  Alignment a{r.T_m_o, r.covariance, r.T_m_o * p.anchor_o, p.t_ns, r.fitness, r.ambiguity};
+  Alignment a{r.T_m_o, r.covariance, r.T_m_o * p.anchor_o, p.t_ns, p.from_ns, r.fitness, r.ambiguity};
   if (!candidates_.empty() && !agree(candidates_.back(), a)) {
-    candidates_.clear();
-    refuse(fmt::format("answer {} disagrees with the previous one", p.seq));
-    candidates_.push_back(a);  // it may be the right one: the next answer decides
+    // One of the two is wrong: start over from this one (the next answer, from new data, decides).
+    candidates_.assign(1, a);
+    status_ = fmt::format("answer {} disagrees with the previous one; asking again", p.seq);
+    spdlog::info("localisation: {}", status_);
+    return std::nullopt;
+  }
+  if (!candidates_.empty() && !independent(candidates_.back(), a)) {
+    status_ = fmt::format(
+        "answer {} ok and agrees, but from much the same data as the last one; waiting for new data", p.seq);
     return std::nullopt;
   }
   candidates_.push_back(a);
+  // The confirming answer should come from fresh data: back to the short submap.
+  window_s_ = options_.window_s;
   if (static_cast<int>(candidates_.size()) < options_.answers_needed) {
-    status_ = fmt::format("answer {} ok (fitness {:.2f}, ambiguity {:.2f}); waiting for {} agreeing answers", p.seq,
-                          r.fitness, r.ambiguity, options_.answers_needed);
+    status_ = fmt::format("answer {} ok (fitness {:.2f}, ambiguity {:.2f}); waiting for {} agreeing answers",
+                          p.seq, r.fitness, r.ambiguity, options_.answers_needed);
     spdlog::info("localisation: {}", status_);
     return std::nullopt;
   }
@@ -194,6 +248,12 @@ std::optional<Alignment> MapLocaliser::handle(const LocalisationReply& reply, Lo
   status_ = fmt::format("localised by answer {} ({} agreeing; fitness {:.2f}, ambiguity {:.2f})", p.seq,
                         candidates_.size(), r.fitness, r.ambiguity);
   return a;
+}
+
+bool MapLocaliser::independent(const Alignment& a, const Alignment& b) const {
+  const double overlap = to_seconds(std::min(a.t_ns, b.t_ns) - std::max(a.from_ns, b.from_ns));
+  const double shorter = to_seconds(std::min(a.t_ns - a.from_ns, b.t_ns - b.from_ns));
+  return overlap <= options_.max_overlap * shorter;
 }
 
 bool MapLocaliser::agree(const Alignment& earlier, const Alignment& later) const {

@@ -131,6 +131,9 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
             : std::optional<double>(gt ? 1e-3 : std::max(1e-3, a.rotation_noise_deg * M_PI / 180.0));
     MRVS_RETURN_IF_ERROR(align_state(state, *target, sigma, yaw_sigma));
   }
+  // After a restart (map, none) the new odometry frame continues where the last run ended:
+  // its first pose is the last pose before the gap (the motion during the gap is lost).
+  if (!target && last_pose_) MRVS_RETURN_IF_ERROR(align_state(state, *last_pose_, 1e-3, std::nullopt));
   // Source map: the odometry frame until the cloud places the filter; none: the odometry
   // frame is taken as the map frame (the user's choice).
   in_map_frame_ = options_.alignment.source != "map";
@@ -146,10 +149,10 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
   db_.add(frame);
   init_ns_ = frame.t_ns;
   ++run_;
-  init_summary_ = fmt::format("initialised ({}) at {} ns: {}; alignment {}{}", init.method, frame.t_ns,
-                              init.detail, options_.alignment.source,
-                              localises() ? " (plain VIO in the odometry frame until the cloud places it in the map)"
-                                          : "");
+  init_summary_ = fmt::format(
+      "initialised ({}) at {} ns: {}; alignment {}{}", init.method, frame.t_ns, init.detail,
+      options_.alignment.source,
+      localises() ? " (plain VIO in the odometry frame until the cloud places it in the map)" : "");
   waiting_.clear();
   return absl::OkStatus();
 }
@@ -167,6 +170,7 @@ std::optional<std::string> VioEstimator::imu_gap(TimestampNs from_ns, TimestampN
 }
 
 void VioEstimator::restart() {
+  if (state_) last_pose_ = SE3d(state_->imu.q_w_b, state_->imu.p_w_b);
   state_.reset();
   in_map_frame_ = false;
   localiser_.reset();
@@ -300,6 +304,14 @@ void VioEstimator::update_points(const FeatureFrame& frame, const std::vector<Fe
   out->timing.points_ms = ms_since(t0) - out->map.selection_ms;
 }
 
+void VioEstimator::feed_gnss(const io::GnssFix& fix, const SE3d& T_b_antenna) {
+  gnss_.push_back(fix);
+  gnss_lever_arm_m_ = T_b_antenna.translation().norm();
+  while (!gnss_.empty() && gnss_.front().t_ns < fix.t_ns - from_seconds(options_.localisation.max_window_s)) {
+    gnss_.pop_front();
+  }
+}
+
 bool VioEstimator::localises() const {
   return options_.alignment.source == "map" && options_.map.enabled && map_ != nullptr;
 }
@@ -314,16 +326,19 @@ void VioEstimator::add_dense_submap(TimestampNs t_cam_ns, const std::vector<Eige
   std::vector<Vec3d> points_w;
   points_w.reserve(points_c0.size());
   for (const Eigen::Vector3f& p : points_c0) points_w.push_back(T_w_c * p.cast<double>());
-  localiser_.add_points(t_cam_ns, points_w);
+  localiser_.add_points(t_cam_ns, points_w, T_w_c.translation());
 }
 
 void VioEstimator::localise(const FeatureFrame& frame,
                             const std::vector<std::pair<FeatureId, Vec3d>>& triangulated, FrameOutput* out) {
   State& s = *state_;
-  for (const auto& [id, p] : triangulated) localiser_.set_track_point(id, frame.t_ns, p);
-  for (const auto& [id, p] : s.points) localiser_.set_track_point(id, frame.t_ns, p.p_w);
+  const Vec3d camera = s.T_w_c(frame.t_ns, 0).translation();
+  for (const auto& [id, p] : triangulated) localiser_.set_track_point(id, frame.t_ns, p, camera);
+  for (const auto& [id, p] : s.points) localiser_.set_track_point(id, frame.t_ns, p.p_w, camera);
+  const std::optional<localisation::PriorRegion> prior =
+      gnss_prior(gnss_, s.imu.t_ns, options_.localisation.window_s, gnss_lever_arm_m_, options_.localisation);
   const std::optional<Alignment> a =
-      localiser_.step(frame.t_ns, s.imu.p_w_b, prior_, *map_, &out->localisation);
+      localiser_.step(frame.t_ns, s.imu.p_w_b, prior, *map_, &out->localisation);
   if (!a) return;
   if (const Status st = reanchor_state(s, a->T_m_o, a->covariance, a->anchor_m); !st.ok()) {
     spdlog::warn("localisation answer not applied: {}", std::string(st.message()));

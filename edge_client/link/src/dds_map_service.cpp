@@ -20,14 +20,16 @@ bool DdsMapService::offers_localisation() {
   if (!info) return false;
   const std::uint32_t v = info->localisation_protocol_version;
   if (v != 0 && v != wire::LOCALISATION_PROTOCOL_VERSION && !warned_protocol_) {
-    spdlog::warn("the cloud speaks localisation protocol {}, this edge {}: no localisation (use matching builds)", v,
-                 wire::LOCALISATION_PROTOCOL_VERSION);
+    spdlog::warn(
+        "the cloud speaks localisation protocol {}, this edge {}: no localisation (use matching builds)", v,
+        wire::LOCALISATION_PROTOCOL_VERSION);
     warned_protocol_ = true;
   }
   return v == wire::LOCALISATION_PROTOCOL_VERSION;
 }
 
-StatusOr<std::size_t> DdsMapService::send_localisation(const localisation::Request& request, float quantum_m) {
+StatusOr<std::size_t> DdsMapService::send_localisation(const localisation::Request& request,
+                                                       float quantum_m) {
   return client_->send_localisation(request, quantum_m);
 }
 

@@ -191,8 +191,9 @@ StatusOr<std::size_t> MapClient::send_localisation(const localisation::Request& 
   std::size_t dropped = 0;
   wire::LocalisationRequest w = link::encode_localisation_request(client_id_, request, quantum_m, &dropped);
   if (dropped > 0) {
-    spdlog::warn("localisation request {}: {} of {} points left out (beyond {} m of the anchor or the {}-point bound)",
-                 request.seq, dropped, request.points.size(), 32767.0 * quantum_m, wire::MAX_SUBMAP_POINTS);
+    spdlog::warn(
+        "localisation request {}: {} of {} points left out (beyond {} m of the anchor or the {}-point bound)",
+        request.seq, dropped, request.points.size(), 32767.0 * quantum_m, wire::MAX_SUBMAP_POINTS);
   }
   const std::size_t bytes = link::payload_bytes(w);
   if (!dds_->localisation_requests->write(&w)) {

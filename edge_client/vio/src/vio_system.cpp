@@ -12,7 +12,7 @@ StatusOr<VioSystem> VioSystem::create(const EdgeOptions& options, const config::
   MRVS_ASSIGN_OR_RETURN(VioEstimator estimator,
                         VioEstimator::create(options.estimator, rig, std::move(groundtruth)));
   std::optional<DenseStereo> dense;
-  if (options.estimator.localisation.submap_source == "dense_stereo") {
+  if (options.estimator.localisation.submap_source != "tracks") {
     MRVS_ASSIGN_OR_RETURN(dense, DenseStereo::create(options.dense_stereo, rig));
   }
   return VioSystem(std::move(tracker), std::move(estimator), std::move(dense));

@@ -70,6 +70,22 @@ Eigen::Matrix<double, N, 1> vec(const std::array<double, N>& a) {
 
 Vec3d vec(const std::array<float, 3>& a) { return Vec3d(a[0], a[1], a[2]); }
 
+/// The request's viewpoints; none when points were left out (the runs no longer line up) or a
+/// count does not fit the wire.
+void encode_viewpoints(const localisation::Request& q, bool all_points_sent, wire::LocalisationRequest* w) {
+  if (!all_points_sent || q.viewpoints.size() > wire::MAX_VIEWPOINTS) return;
+  for (const localisation::Viewpoint& v : q.viewpoints) {
+    if (v.count > 65535 || !v.position.allFinite()) {
+      w->viewpoints().clear();
+      return;
+    }
+    wire::Viewpoint x;
+    x.position({v.position.x(), v.position.y(), v.position.z()});
+    x.count(static_cast<std::uint16_t>(v.count));
+    w->viewpoints().push_back(x);
+  }
+}
+
 }  // namespace
 
 wire::LocalisationRequest encode_localisation_request(std::uint32_t client_id, const localisation::Request& q,
@@ -99,10 +115,12 @@ wire::LocalisationRequest encode_localisation_request(std::uint32_t client_id, c
       continue;
     }
     wire::SubmapPoint s;
-    s.xyz({static_cast<std::int16_t>(k.x()), static_cast<std::int16_t>(k.y()), static_cast<std::int16_t>(k.z())});
+    s.xyz({static_cast<std::int16_t>(k.x()), static_cast<std::int16_t>(k.y()),
+           static_cast<std::int16_t>(k.z())});
     w.points().push_back(s);
   }
   if (dropped) *dropped = left_out;
+  encode_viewpoints(q, left_out == 0, &w);
   return w;
 }
 
@@ -112,7 +130,8 @@ StatusOr<localisation::Request> decode_localisation_request(const wire::Localisa
                                                   w.protocol_version(), wire::LOCALISATION_PROTOCOL_VERSION));
   }
   if (!(std::isfinite(w.quantum_m()) && w.quantum_m() > 0.0f)) {
-    return absl::InvalidArgumentError(fmt::format("quantum_m must be a positive number, got {}", w.quantum_m()));
+    return absl::InvalidArgumentError(
+        fmt::format("quantum_m must be a positive number, got {}", w.quantum_m()));
   }
   if (w.points().size() > wire::MAX_SUBMAP_POINTS) {
     return absl::InvalidArgumentError(
@@ -127,10 +146,25 @@ StatusOr<localisation::Request> decode_localisation_request(const wire::Localisa
   q.stamp_ns = w.stamp_ns();
   q.anchor_o = vec(w.anchor());
   q.gravity_o = vec(w.gravity());
-  if (w.prior_radius_m() > 0.0f) q.prior = localisation::PriorRegion{vec(w.prior_centre()), w.prior_radius_m()};
+  if (w.prior_radius_m() > 0.0f)
+    q.prior = localisation::PriorRegion{vec(w.prior_centre()), w.prior_radius_m()};
   q.points.reserve(w.points().size());
   for (const wire::SubmapPoint& s : w.points()) {
     q.points.emplace_back(Eigen::Vector3f(s.xyz()[0], s.xyz()[1], s.xyz()[2]) * w.quantum_m());
+  }
+  if (w.viewpoints().size() > wire::MAX_VIEWPOINTS) {
+    return absl::InvalidArgumentError(
+        fmt::format("{} viewpoints, at most {}", w.viewpoints().size(), wire::MAX_VIEWPOINTS));
+  }
+  std::size_t seen = 0;
+  for (const wire::Viewpoint& v : w.viewpoints()) {
+    if (!all_finite(v.position())) return absl::InvalidArgumentError("viewpoints must be finite");
+    q.viewpoints.push_back({Eigen::Vector3f(v.position()[0], v.position()[1], v.position()[2]), v.count()});
+    seen += v.count();
+  }
+  if (seen > q.points.size()) {
+    return absl::InvalidArgumentError(
+        fmt::format("the viewpoints count {} points, the request has {}", seen, q.points.size()));
   }
   return q;
 }
@@ -174,7 +208,8 @@ StatusOr<localisation::Result> decode_localisation_reply(const wire::Localisatio
                                            w.protocol_version(), wire::LOCALISATION_PROTOCOL_VERSION));
   }
   const std::optional<Status> status = from_wire(w.status());
-  if (!status) return absl::DataLossError(fmt::format("localisation reply with unknown status {}", int(w.status())));
+  if (!status)
+    return absl::DataLossError(fmt::format("localisation reply with unknown status {}", int(w.status())));
   localisation::Result r;
   r.status = *status;
   r.detail = w.detail();
@@ -183,16 +218,18 @@ StatusOr<localisation::Result> decode_localisation_reply(const wire::Localisatio
   r.ambiguity = w.ambiguity();
   r.hypotheses = static_cast<int>(w.hypotheses());
   r.time_ms = w.time_ms();
-  if (r.status != Status::kOk && r.status != Status::kAmbiguous && r.status != Status::kTooLittleStructure) return r;
+  if (r.status != Status::kOk && r.status != Status::kAmbiguous && r.status != Status::kTooLittleStructure)
+    return r;
   const Eigen::Vector4d q = vec(w.rotation());
   if (!all_finite(w.translation()) || !q.allFinite() || std::abs(q.norm() - 1.0) > 1e-6 ||
       !all_finite(w.covariance())) {
-    return absl::DataLossError(fmt::format("localisation reply {}: non-finite pose or non-unit rotation",
-                                           w.request_seq()));
+    return absl::DataLossError(
+        fmt::format("localisation reply {}: non-finite pose or non-unit rotation", w.request_seq()));
   }
   r.T_m_o = SE3d(Quatd(q(3), q(0), q(1), q(2)), vec(w.translation()));
   for (int i = 0, k = 0; i < 6; ++i) {
-    for (int j = i; j < 6; ++j) r.covariance(i, j) = r.covariance(j, i) = w.covariance()[static_cast<std::size_t>(k++)];
+    for (int j = i; j < 6; ++j)
+      r.covariance(i, j) = r.covariance(j, i) = w.covariance()[static_cast<std::size_t>(k++)];
   }
   return r;
 }

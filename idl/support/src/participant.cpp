@@ -194,9 +194,9 @@ StatusOr<LinkTopics> create_link_topics(Participant& participant,
   MRVS_ASSIGN_OR_RETURN(topics.localisation_requests,
                         participant.topic(kLocalisationRequestTopic,
                                           dds::TypeSupport(new wire::LocalisationRequestPubSubType())));
-  MRVS_ASSIGN_OR_RETURN(topics.localisation_replies,
-                        participant.topic(kLocalisationReplyTopic,
-                                          dds::TypeSupport(new wire::LocalisationReplyPubSubType())));
+  MRVS_ASSIGN_OR_RETURN(
+      topics.localisation_replies,
+      participant.topic(kLocalisationReplyTopic, dds::TypeSupport(new wire::LocalisationReplyPubSubType())));
   return topics;
 }
 

@@ -139,7 +139,8 @@ TEST(Reanchor, MovesEverythingAndKeepsWhatIsRelative) {
   const Vec3d v_moved = T_m_o.rotation_matrix() * before.imu.v_w_b;
   EXPECT_MATRIX_NEAR(s.imu.p_w_b, p_moved, 1e-12);
   EXPECT_MATRIX_NEAR(s.imu.v_w_b, v_moved, 1e-12);
-  EXPECT_LT(so3::log<double>(s.imu.q_w_b.conjugate() * (T_m_o.quaternion() * before.imu.q_w_b)).norm(), 1e-12);
+  EXPECT_LT(so3::log<double>(s.imu.q_w_b.conjugate() * (T_m_o.quaternion() * before.imu.q_w_b)).norm(),
+            1e-12);
   for (const auto& [t, c] : s.clones) {
     const Vec3d p = T_m_o * before.clones.at(t).T_w_b.translation();
     const Vec3d fej = T_m_o * before.clones.at(t).fej.translation();

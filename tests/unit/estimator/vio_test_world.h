@@ -57,7 +57,7 @@ class LocalMapService : public MapService {
 /// Built once per option set within a test binary.
 const SyntheticSequence* synthetic_sequence(const SyntheticOptions& options);
 
-/// The estimator options of config/euroc.yaml.
+/// The estimator options of config/euroc.yaml, with the paper's alignment (gt_noisy).
 EstimatorOptions euroc_estimator_options();
 
 /// Runs the estimator over the sequence (with `map` when given); the IMU poses it returned

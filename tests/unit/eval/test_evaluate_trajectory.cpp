@@ -82,6 +82,32 @@ TEST(EvalTool, SyntheticShiftedCopyWithTimeOffsetAndJson) {
   EXPECT_TRUE(std::isnan(value_of(off.output, "ATE_RMSE_SIM3_m"))) << "sim3 not requested\n" << off.output;
 }
 
+// --at: the unaligned error of one pose (where the cloud placed the edge), here a pose turned
+// 3 deg about +z and shifted 5 cm, among poses that are exact.
+TEST(EvalTool, TheErrorOfOnePoseAtATime) {
+  const mrvs::test::TempDir dir;
+  const synthetic::SmoothTrajectory traj(7);
+  const io::Trajectory gt = synthetic::sample(traj, kT0, 5 * kMs, 2000);
+  io::Trajectory est;
+  for (std::size_t i = 0; i < gt.size(); i += 10) est.push_back(gt[i]);
+  io::StampedPose& p = est[50];
+  const Quatd turn(Eigen::AngleAxisd(3.0 * M_PI / 180.0, Vec3d::UnitZ()));
+  p.T_w_b = SE3d(turn * p.T_w_b.quaternion(), p.T_w_b.translation() + Vec3d(0.03, 0.04, 0.0));
+  ASSERT_TRUE(io::write_tum_trajectory(dir / "gt.txt", gt).ok());
+  ASSERT_TRUE(io::write_tum_trajectory(dir / "est.txt", est).ok());
+  const std::string args = "--est " + quoted(dir / "est.txt") + " --gt " + quoted(dir / "gt.txt") + " --at ";
+  RunResult r = run_tool(args + std::to_string(p.t_ns + 2 * kMs));  // the nearest pose within --max-dt
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(static_cast<TimestampNs>(value_of(r.output, "POSE_AT_T_NS")), p.t_ns);
+  EXPECT_NEAR(value_of(r.output, "POSE_ERROR_AT_M"), 0.05, 1e-6);
+  EXPECT_NEAR(value_of(r.output, "POSE_ERROR_AT_DEG"), 3.0, 1e-3);
+  EXPECT_NEAR(value_of(r.output, "POSE_HEADING_ERROR_AT_DEG"), 3.0, 1e-3);
+  r = run_tool(args + std::to_string(est[51].t_ns));
+  EXPECT_NEAR(value_of(r.output, "POSE_ERROR_AT_M"), 0.0, 1e-6);
+  r = run_tool(args + std::to_string(p.t_ns + 30 * kMs));  // between poses 50 ms apart: none within 10 ms
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+}
+
 TEST(EvalTool, EurocGroundTruthAgainstShiftedCopy) {
   const std::filesystem::path gt_path = mrvs::test::euroc_groundtruth_file("V1_01_easy.txt");
   ASSERT_TRUE(std::filesystem::exists(gt_path))

@@ -12,8 +12,10 @@
 
 #include "mrvs_linkPubSubTypes.h"
 
+#include "localise_scene.h"
 #include "mrvs/cloud/ray_server.h"
 #include "mrvs/edge/map_client.h"
+#include "mrvs/link/localisation_codec.h"
 
 namespace mrvs {
 namespace {
@@ -64,7 +66,7 @@ std::vector<voxel::RayQuery> rays_towards_floor(int n, std::uint32_t seed) {
 
 class LinkDds : public ::testing::Test {
  protected:
-  void start_server() {
+  void start_server(std::shared_ptr<const localise::Localiser> localiser = nullptr) {
     auto engine = map::QueryEngine::create(map_, map::QueryOptions{});
     ASSERT_TRUE(engine.ok()) << engine.status();
     engine_ = std::make_unique<map::QueryEngine>(*engine);
@@ -73,6 +75,7 @@ class LinkDds : public ::testing::Test {
     options.map_id = "test_map";
     options.map_checksum = 1234;
     options.stats_period_ns = 0;
+    options.localiser = std::move(localiser);
     auto server = cloud::RayServer::create(*engine, options);
     ASSERT_TRUE(server.ok()) << server.status();
     server_ = std::move(*server);
@@ -286,6 +289,134 @@ TEST_F(LinkDds, TwoClientsAtOnceGetOnlyTheirOwnReplies) {
   // Both read the shared reply topic: the other's replies arrived and were dropped.
   EXPECT_GT(a->stats().foreign_dropped + b->stats().foreign_dropped, 0u);
   EXPECT_EQ(server_->counters().size(), 2u);
+}
+
+// ---- The localisation service over DDS -------------------------------------------------
+
+/// A cluttered room map and its localiser; `map_` becomes the room so the ray tests' server
+/// set-up serves it.
+std::shared_ptr<const localise::Localiser> room_localiser(std::shared_ptr<const map::VoxelMap>* map,
+                                                          std::vector<Eigen::Vector3d>* samples) {
+  *samples = localise::test::cluttered_room(12, 3).sample(0.01);
+  const Vec3d origin(332000.0, 4140000.0, 20.0);
+  for (auto& p : *samples) p += origin;
+  *map = localise::test::voxelise(*samples, {0.03, 0.1}, origin);
+  auto l = localise::Localiser::create(*map, localise::LocaliserOptions{});
+  EXPECT_TRUE(l.ok()) << l.status();
+  return std::make_shared<const localise::Localiser>(std::move(*l));
+}
+
+/// Sends until a reply arrives (discovery takes a moment); nullopt after `attempts`.
+std::optional<edge::LocalisationAnswer> localise_until_answered(edge::MapClient& client,
+                                                                localisation::Request q, float quantum,
+                                                                int attempts = 20) {
+  for (int i = 0; i < attempts; ++i) {
+    q.seq = 100 + i;
+    if (!client.send_localisation(q, quantum).ok()) continue;
+    for (int k = 0; k < 50; ++k) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      for (auto& a : client.take_localisation_replies()) {
+        if (a.seq == q.seq) return a;
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+TEST_F(LinkDds, LocalisationOverDdsEqualsTheInProcessAnswer) {
+  std::vector<Vec3d> samples;
+  auto localiser = room_localiser(&map_, &samples);
+  start_server(localiser);
+  auto client = make_client();
+  ASSERT_NE(client, nullptr);
+  const auto info = client->wait_for_map_info(5'000 * kMs);
+  ASSERT_TRUE(info.has_value());
+  EXPECT_EQ(info->localisation_protocol_version, wire::LOCALISATION_PROTOCOL_VERSION);
+  const SE3d T_o_m =
+      localise::test::yaw_pose(0.8, Vec3d(2, -1, 0.2)) * SE3d(Quatd::Identity(), -map_->origin);
+  const auto q =
+      localise::test::submap_request(samples, map_->origin + Vec3d(3.0, 2.5, 1.3), 4.0, 3000, 0.01, T_o_m, 5);
+  const float quantum = 0.005f;
+  const auto answer = localise_until_answered(*client, q, quantum);
+  ASSERT_TRUE(answer.has_value());
+  ASSERT_EQ(answer->result.status, localisation::Status::kOk) << answer->result.detail;
+  // The cloud localised what the wire carried: the same request decoded here gives the same answer.
+  auto carried = link::decode_localisation_request(link::encode_localisation_request(1, q, quantum));
+  ASSERT_TRUE(carried.ok());
+  const auto local = localiser->localise(*carried);
+  EXPECT_LT((answer->result.T_m_o.translation() - local.T_m_o.translation()).norm(), 1e-9);
+  EXPECT_LT(answer->result.T_m_o.quaternion().angularDistance(local.T_m_o.quaternion()), 1e-9);
+  EXPECT_NEAR(answer->result.fitness, local.fitness, 1e-6);
+  for (int i = 0; i < 6; ++i)
+    EXPECT_NEAR(answer->result.covariance(i, i), local.covariance(i, i),
+                1e-6 * local.covariance(i, i) + 1e-12);
+  // ... and it is right.
+  EXPECT_LT((answer->result.T_m_o * q.anchor_o - T_o_m.inverse() * q.anchor_o).norm(), 0.03);
+  // Bytes: 6 per point plus a fixed header, well within 64 KB.
+  EXPECT_GE(client->stats().localisation_bytes_up, 6 * q.points.size());
+  const std::size_t bytes = link::payload_bytes(link::encode_localisation_request(1, q, quantum));
+  EXPECT_EQ(bytes,
+            link::payload_bytes(link::encode_localisation_request(1, localisation::Request{}, quantum)) +
+                6 * q.points.size());
+  localisation::Request big = q;
+  big.points.assign(20000, Eigen::Vector3f::Zero());
+  big.viewpoints.assign(64, localisation::Viewpoint{Eigen::Vector3f::Zero(), 150});
+  EXPECT_LT(link::payload_bytes(link::encode_localisation_request(1, big, quantum)), 65536u);
+}
+
+TEST_F(LinkDds, MalformedLocalisationRequestsGetAStatusAndServingGoesOn) {
+  std::vector<Vec3d> samples;
+  start_server(room_localiser(&map_, &samples));
+  auto peer = link::Participant::create(loopback("raw_peer"));
+  ASSERT_TRUE(peer.ok()) << peer.status();
+  auto topics = link::create_link_topics(**peer);
+  ASSERT_TRUE(topics.ok()) << topics.status();
+  auto writer = (*peer)->writer(topics->localisation_requests, link::kWriterProfile);
+  auto reader = (*peer)->reader(topics->localisation_replies, link::kReaderProfile);
+  ASSERT_TRUE(writer.ok() && reader.ok());
+  const auto good = localise::test::submap_request(samples, map_->origin + Vec3d(4.0, 3.0, 1.2), 4.0, 2000,
+                                                   0.01, SE3d(Quatd::Identity(), -map_->origin), 6);
+  std::vector<wire::LocalisationRequest> bad(5, link::encode_localisation_request(77, good, 0.005f));
+  bad[0].protocol_version(99);
+  bad[1].quantum_m(0.0f);
+  bad[2].anchor({std::nan(""), 0.0, 0.0});
+  bad[3].points().resize(10);  // too few points
+  bad[4].gravity({0.0f, 0.0f, -5.0f});
+  for (std::size_t i = 0; i < bad.size(); ++i) bad[i].client_id(static_cast<std::uint32_t>(70 + i));
+  wire::LocalisationRequest ok = link::encode_localisation_request(77, good, 0.005f);  // one client each
+  std::map<std::uint64_t, wire::LocalisationReply> replies;
+  for (int attempt = 0; attempt < 10 && replies.size() < bad.size() + 1; ++attempt) {
+    for (std::size_t i = 0; i < bad.size(); ++i) {
+      bad[i].request_seq(1000 * attempt + i);
+      (*writer)->write(&bad[i]);
+    }
+    ok.request_seq(1000 * attempt + 999);
+    (*writer)->write(&ok);
+    wire::LocalisationReply r;
+    eprosima::fastdds::dds::SampleInfo info;
+    for (int k = 0; k < 40 && replies.size() < bad.size() + 1; ++k) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      while ((*reader)->take_next_sample(&r, &info) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+        if (info.valid_data && r.client_id() >= 70 && r.client_id() <= 77)
+          replies[r.request_seq() % 1000] = r;
+      }
+    }
+  }
+  ASSERT_EQ(replies.size(), bad.size() + 1);
+  for (std::size_t i = 0; i < bad.size(); ++i) {
+    EXPECT_EQ(replies.at(i).status(), wire::LOCALISATION_BAD_REQUEST) << i << ": " << replies.at(i).detail();
+    EXPECT_FALSE(std::string(replies.at(i).detail()).empty()) << i;
+  }
+  EXPECT_EQ(replies.at(999).status(), wire::LOCALISATION_OK) << replies.at(999).detail();
+}
+
+TEST_F(LinkDds, ACloudWithoutLocalisationSaysSo) {
+  start_server();
+  auto client = make_client();
+  ASSERT_NE(client, nullptr);
+  const auto info = client->wait_for_map_info(5'000 * kMs);
+  ASSERT_TRUE(info.has_value());
+  EXPECT_EQ(info->localisation_protocol_version, 0u);
 }
 
 }  // namespace

@@ -59,7 +59,8 @@ Scene cluttered_room(int boxes, std::uint64_t seed) {
 }
 
 std::shared_ptr<map::VoxelMap> voxelise(const std::vector<Eigen::Vector3d>& points,
-                                        const std::vector<double>& resolutions, const Eigen::Vector3d& origin) {
+                                        const std::vector<double>& resolutions,
+                                        const Eigen::Vector3d& origin) {
   auto m = std::make_shared<map::VoxelMap>();
   m->origin = origin;
   for (double r : resolutions) {
@@ -79,9 +80,9 @@ std::shared_ptr<map::VoxelMap> voxelise(const std::vector<Eigen::Vector3d>& poin
   return m;
 }
 
-localisation::Request submap_request(const std::vector<Eigen::Vector3d>& samples, const Eigen::Vector3d& viewpoint,
-                                     double range, int max_points, double sigma, const SE3d& T_o_m,
-                                     std::uint64_t seed) {
+localisation::Request submap_request(const std::vector<Eigen::Vector3d>& samples,
+                                     const Eigen::Vector3d& viewpoint, double range, int max_points,
+                                     double sigma, const SE3d& T_o_m, std::uint64_t seed) {
   std::vector<Eigen::Vector3d> near;
   for (const Eigen::Vector3d& p : samples) {
     if ((p - viewpoint).norm() <= range) near.push_back(p);
@@ -91,7 +92,8 @@ localisation::Request submap_request(const std::vector<Eigen::Vector3d>& samples
   localisation::Request q;
   q.seq = 1;
   q.anchor_o = T_o_m * viewpoint;
-  const std::size_t step = std::max<std::size_t>(1, near.size() / static_cast<std::size_t>(std::max(max_points, 1)));
+  const std::size_t step =
+      std::max<std::size_t>(1, near.size() / static_cast<std::size_t>(std::max(max_points, 1)));
   for (std::size_t i = 0; i < near.size(); i += step) {
     const Eigen::Vector3d noisy = near[i] + Eigen::Vector3d(n(rng), n(rng), n(rng));
     q.points.push_back((T_o_m * noisy - q.anchor_o).cast<float>());

@@ -42,9 +42,9 @@ std::shared_ptr<map::VoxelMap> voxelise(const std::vector<Eigen::Vector3d>& poin
 /// A submap: the scene's samples within `range` of `viewpoint` (map frame), thinned to about
 /// `max_points`, with isotropic noise `sigma`, expressed in the odometry frame T_o_m; the
 /// anchor is the viewpoint.
-localisation::Request submap_request(const std::vector<Eigen::Vector3d>& samples, const Eigen::Vector3d& viewpoint,
-                                     double range, int max_points, double sigma, const SE3d& T_o_m,
-                                     std::uint64_t seed);
+localisation::Request submap_request(const std::vector<Eigen::Vector3d>& samples,
+                                     const Eigen::Vector3d& viewpoint, double range, int max_points,
+                                     double sigma, const SE3d& T_o_m, std::uint64_t seed);
 
 /// A gravity-aligned pose: yaw (rad) about +z and a translation.
 SE3d yaw_pose(double yaw, const Eigen::Vector3d& t);

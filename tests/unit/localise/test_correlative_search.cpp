@@ -9,11 +9,13 @@
 namespace mrvs::localise {
 namespace {
 
-double exhaustive_best(const LikelihoodPyramid& g, const std::vector<Eigen::Vector3d>& pts, const SearchWindow& w) {
+double exhaustive_best(const LikelihoodPyramid& g, const std::vector<Eigen::Vector3d>& pts,
+                       const SearchWindow& w) {
   const int yaws = static_cast<int>(std::ceil(2.0 * kPi / w.yaw_step_rad));
   int best = 0;
   for (int k = 0; k < yaws; ++k) {
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(2.0 * kPi * k / yaws, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(2.0 * kPi * k / yaws, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     std::vector<Eigen::Vector3i> off;
     for (const auto& p : pts) {
       off.push_back(((R * p) / g.resolution() + Eigen::Vector3d::Constant(0.5)).array().floor().cast<int>());
@@ -36,7 +38,8 @@ TEST(CorrelativeSearch, BestScoreEqualsTheExhaustiveSearch) {
   for (const auto& p : samples) map_pts.push_back(p.cast<float>());
   const Eigen::AlignedBox3d box(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(8.5, 6.5, 3.5));
   const auto g = LikelihoodPyramid::build(map_pts, box, 0.25, 4, 1.0);
-  const auto q = test::submap_request(samples, {5.0, 2.0, 1.2}, 2.5, 150, 0.0, test::yaw_pose(0.7, {1, 2, 0}), 1);
+  const auto q =
+      test::submap_request(samples, {5.0, 2.0, 1.2}, 2.5, 150, 0.0, test::yaw_pose(0.7, {1, 2, 0}), 1);
   std::vector<Eigen::Vector3d> pts;
   for (const auto& p : q.points) pts.push_back(p.cast<double>());
   SearchWindow w;
@@ -67,7 +70,8 @@ TEST(CorrelativeSearch, FindsTheTruePoseInAClutteredRoom) {
   const auto g = LikelihoodPyramid::build(map_pts, box, 0.1, 5, 1.0);
   const Eigen::Vector3d view(2.5, 3.5, 1.4);
   const double yaw_o_m = -2.1;
-  const auto q = test::submap_request(samples, view, 3.5, 600, 0.02, test::yaw_pose(yaw_o_m, {4, -1, 0.3}), 2);
+  const auto q =
+      test::submap_request(samples, view, 3.5, 600, 0.02, test::yaw_pose(yaw_o_m, {4, -1, 0.3}), 2);
   std::vector<Eigen::Vector3d> pts;
   for (const auto& p : q.points) pts.push_back(p.cast<double>());
   SearchWindow w;

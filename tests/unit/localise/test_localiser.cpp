@@ -41,8 +41,8 @@ TEST(Localiser, FindsAClutteredRoomFromAnywhere) {
   const Eigen::Vector3d views[] = {{2.0, 2.0, 1.2}, {6.0, 4.0, 1.0}, {4.0, 1.5, 1.5}, {1.5, 4.5, 1.3}};
   int k = 0;
   for (const Eigen::Vector3d& v : views) {
-    const SE3d T_o_m = test::yaw_pose(0.4 + 1.3 * k, Eigen::Vector3d(-3.0 + k, 2.0, 0.5)) *
-                       SE3d(Quatd::Identity(), -origin);
+    const SE3d T_o_m =
+        test::yaw_pose(0.4 + 1.3 * k, Eigen::Vector3d(-3.0 + k, 2.0, 0.5)) * SE3d(Quatd::Identity(), -origin);
     const auto q = test::submap_request(shifted, v + origin, 4.0, 4000, 0.01, T_o_m, 7 + k);
     const auto r = loc.localise(q);
     ASSERT_EQ(r.status, Status::kOk) << k << ": " << r.detail;
@@ -53,7 +53,8 @@ TEST(Localiser, FindsAClutteredRoomFromAnywhere) {
     EXPECT_LT(r.ambiguity, 0.8);
     // The covariance (inflated) covers the error: 3 sigma per axis.
     const Eigen::Vector3d d = r.T_m_o * q.anchor_o - T_o_m.inverse() * q.anchor_o;
-    for (int i = 0; i < 3; ++i) EXPECT_LT(std::abs(d[i]), 3.0 * std::sqrt(r.covariance(i, i)) + 1e-4) << k << " " << i;
+    for (int i = 0; i < 3; ++i)
+      EXPECT_LT(std::abs(d[i]), 3.0 * std::sqrt(r.covariance(i, i)) + 1e-4) << k << " " << i;
     EXPECT_GT(r.time_ms, 0.0);
     ++k;
   }
@@ -63,7 +64,8 @@ TEST(Localiser, ABareRectangularRoomIsAmbiguous) {
   test::Scene scene;  // 8 x 6 x 3 m, no boxes: a half turn about its centre maps it onto itself
   const auto samples = scene.sample(0.01);
   const Localiser loc = make(test::voxelise(samples, {0.03, 0.1}));
-  const auto q = test::submap_request(samples, {4.3, 3.2, 1.4}, 4.0, 4000, 0.01, test::yaw_pose(1.0, {1, 1, 0}), 3);
+  const auto q =
+      test::submap_request(samples, {4.3, 3.2, 1.4}, 4.0, 4000, 0.01, test::yaw_pose(1.0, {1, 1, 0}), 3);
   const auto r = loc.localise(q);
   EXPECT_EQ(r.status, Status::kAmbiguous) << r.detail;
   EXPECT_GT(r.ambiguity, 0.9);
@@ -74,7 +76,8 @@ TEST(Localiser, OneWallIsTooLittleStructure) {
   const Localiser loc = make(test::voxelise(scene.sample(0.01), {0.03, 0.1}));
   localisation::Request q;
   for (double y = -1.0; y <= 1.0; y += 0.02) {
-    for (double z = -0.5; z <= 0.8; z += 0.02) q.points.emplace_back(2.0f, static_cast<float>(y), static_cast<float>(z));
+    for (double z = -0.5; z <= 0.8; z += 0.02)
+      q.points.emplace_back(2.0f, static_cast<float>(y), static_cast<float>(z));
   }
   const auto r = loc.localise(q);
   EXPECT_TRUE(r.status == Status::kTooLittleStructure || r.status == Status::kAmbiguous)

@@ -43,7 +43,8 @@ TEST(PointToPlane, ConvergesToTheTruePose) {
   const Eigen::Vector3d view(3.0, 2.5, 1.3);
   const auto pts = submap(view, 0.0, 1);
   FineOptions o;
-  const FineResult r = refine_pose(room().surface, pts, 3.0 * kDegToRad, view + Eigen::Vector3d(0.1, -0.08, 0.05), o);
+  const FineResult r =
+      refine_pose(room().surface, pts, 3.0 * kDegToRad, view + Eigen::Vector3d(0.1, -0.08, 0.05), o);
   EXPECT_LT((r.anchor - view).norm(), 0.003);
   EXPECT_LT(std::abs(r.yaw) * kRadToDeg, 0.05);
   EXPECT_GT(r.fitness, 0.95);

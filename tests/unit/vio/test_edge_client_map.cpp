@@ -127,10 +127,12 @@ double ate_raw(const fs::path& estimate) {
 TEST(EdgeClientMap, TheMapOverDdsBeatsPlainVioWithinThePaperBudget) {
   ASSERT_FALSE(clip().map.empty());
   const mrvs::test::TempDir dir;
-  const auto plain = edge_client(dir / "plain.txt", "--no-map --log-level warn --progress 0");
+  // The paper's protocol (the ablation gt_noisy): both start from the ground truth plus 2 cm.
+  const std::string paper = " --set estimator.alignment.source=gt_noisy";
+  const auto plain = edge_client(dir / "plain.txt", "--no-map --log-level warn --progress 0" + paper);
   ASSERT_EQ(plain.exit_code, 0) << plain.output;
   auto server = start_server(dir / "server.log");
-  const auto with_map = edge_client(dir / "map.txt", "--map-wait 20 --log-level warn --progress 0");
+  const auto with_map = edge_client(dir / "map.txt", "--map-wait 20 --log-level warn --progress 0" + paper);
   server->stop();
   ASSERT_EQ(with_map.exit_code, 0) << with_map.output;
   const double e_plain = ate_raw(dir / "plain.txt"), e_map = ate_raw(dir / "map.txt");
@@ -156,7 +158,10 @@ TEST(EdgeClientMap, ACloudKilledMidRunLeavesPlainVioAndIsUsedAgainAfterARestart)
   auto server = start_server(dir / "server1.log");
   const fs::path log = dir / "client.log";
   mrvs::test::BackgroundTool client(
-      MRVS_EDGE_CLIENT, client_args(dir / "traj.txt", "--map-wait 20 --log-level info --progress 0.05"), log);
+      MRVS_EDGE_CLIENT,
+      client_args(dir / "traj.txt",
+                  "--map-wait 20 --log-level info --progress 0.05 --set estimator.alignment.source=gt_noisy"),
+      log);
   // The outage is counted in the client's frames, not in wall time (how fast the client runs
   // depends on the machine's load): the cloud dies at frame 160 of 480, well after the
   // initialisation, and comes back after the client has gone 60 frames without it.
@@ -192,6 +197,78 @@ TEST(EdgeClientMap, ACloudKilledMidRunLeavesPlainVioAndIsUsedAgainAfterARestart)
   EXPECT_LT(value_of(out, "FRAMES_WITHOUT_MAP"), 0.9 * frames);
   EXPECT_GT(value_of(out, "POSES"), 0.9 * frames);
   EXPECT_LT(ate_raw(dir / "traj.txt"), 0.08);
+}
+
+/// The clip as a user has it: no ground-truth folder (the rest linked, not copied).
+fs::path clip_without_groundtruth(const fs::path& dir) {
+  const fs::path mav0 = dir / "no_gt/mav0";
+  fs::create_directories(mav0);
+  for (const char* sensor : {"cam0", "cam1", "imu0"})
+    fs::create_directory_symlink(clip().sequence / "mav0" / sensor, mav0 / sensor);
+  return dir / "no_gt";
+}
+
+/// Unaligned ATE RMSE (m) of the part of `estimate` from `from_ns` on.
+double ate_raw_from(const fs::path& estimate, TimestampNs from_ns) {
+  auto est = io::read_tum_trajectory(estimate);
+  if (!est.ok()) return 1e9;
+  io::Trajectory tail;
+  for (const auto& p : *est) {
+    if (p.t_ns >= from_ns) tail.push_back(p);
+  }
+  const fs::path part = estimate.string() + ".tail";
+  if (!io::write_tum_trajectory(part, tail).ok()) return 1e9;
+  return ate_raw(part);
+}
+
+// The product's default (no ground truth at run time): the client finds itself in the map
+// through the cloud's localisation service and ends in the map frame, near the truth.
+TEST(EdgeClientMap, WithoutGroundTruthTheCloudPlacesTheClientInItsMap) {
+  ASSERT_FALSE(clip().map.empty());
+  const mrvs::test::TempDir dir;
+  const fs::path sequence = clip_without_groundtruth(dir.path());
+  auto server = start_server(dir / "server.log");
+  const auto run = mrvs::test::run_tool(
+      MRVS_EDGE_CLIENT,
+      "--dataset " + quoted(sequence) + " --config " + quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") +
+          " --output " + quoted(dir / "traj.txt") + " --threads 1 --dds-profile " + quoted(profile()) +
+          " --dds-domain " + std::to_string(kDomain) + " --map-wait 20 --log-level info --progress 0");
+  server->stop();
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(run.output.find("ground truth read"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("TRAJECTORY_FRAME: map"), std::string::npos) << run.output;
+  EXPECT_EQ(value_of(run.output, "LOCALISED"), 1.0) << run.output;
+  RecordProperty("localised_after_s", std::to_string(value_of(run.output, "LOCALISED_AFTER_S")));
+  RecordProperty("request_bytes", std::to_string(value_of(run.output, "LOCALISATION_REQUEST_BYTES")));
+  EXPECT_GT(value_of(run.output, "LOCALISATION_REQUEST_BYTES"), 0.0);
+  EXPECT_LT(value_of(run.output, "LOCALISATION_REQUEST_BYTES"), 65536.0);
+  EXPECT_EQ(value_of(run.output, "POSES_NEVER_IN_MAP_FRAME"), 0.0);
+  // Every pose, those before the answer included, in the map frame and near the truth.
+  const double ate = ate_raw(dir / "traj.txt");
+  RecordProperty("ate_m", std::to_string(ate));
+  EXPECT_LT(ate, 0.05) << run.output;
+  EXPECT_LT(
+      ate_raw_from(dir / "traj.txt", static_cast<TimestampNs>(value_of(run.output, "LOCALISED_AT_T_NS"))),
+      0.05);
+}
+
+// A cloud that never answers: the client says so, runs plain VIO to the end and writes every
+// pose in its odometry frame.
+TEST(EdgeClientMap, ADeadCloudEndsAsPlainVio) {
+  const mrvs::test::TempDir dir;
+  const fs::path sequence = clip_without_groundtruth(dir.path());
+  const auto run = mrvs::test::run_tool(
+      MRVS_EDGE_CLIENT,
+      "--dataset " + quoted(sequence) + " --config " + quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") +
+          " --output " + quoted(dir / "traj.txt") + " --threads 1 --dds-profile " + quoted(profile()) +
+          " --dds-domain " + std::to_string(kDomain) + " --map-wait 1 --log-level info --progress 0");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("no map from the cloud"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("never placed the filter in its map"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("TRAJECTORY_FRAME: odometry"), std::string::npos) << run.output;
+  EXPECT_EQ(value_of(run.output, "LOCALISED"), 0.0);
+  EXPECT_EQ(value_of(run.output, "FRAMES_SKIPPED"), 0.0);
+  EXPECT_GT(value_of(run.output, "POSES"), 0.9 * value_of(run.output, "FRAMES"));
 }
 
 }  // namespace

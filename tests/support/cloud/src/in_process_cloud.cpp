@@ -36,7 +36,8 @@ edge::MapReply InProcessCloud::query(const std::vector<voxel::RayQuery>& rays, T
   return out;
 }
 
-StatusOr<std::size_t> InProcessCloud::send_localisation(const localisation::Request& request, float quantum_m) {
+StatusOr<std::size_t> InProcessCloud::send_localisation(const localisation::Request& request,
+                                                        float quantum_m) {
   if (!offers_localisation()) return absl::UnavailableError("no localisation service");
   localisation::Request q = request;  // as the wire carries it
   for (Eigen::Vector3f& p : q.points) p = (p / quantum_m).array().round().matrix() * quantum_m;

@@ -30,7 +30,7 @@ struct LocalisationServerOptions {
 struct LocalisationCounters {
   std::uint64_t requests = 0;
   std::uint64_t answered_ok = 0;
-  std::uint64_t refused = 0;  ///< any other status
+  std::uint64_t refused = 0;   ///< any other status
   std::uint64_t bytes_in = 0;  ///< CDR payload of the requests
   std::uint64_t bytes_out = 0;
   double last_time_ms = 0.0;
@@ -39,10 +39,9 @@ struct LocalisationCounters {
 class LocalisationServer {
  public:
   /// Creates the reader and writer on `participant` (which must outlive the server).
-  static StatusOr<std::unique_ptr<LocalisationServer>> create(link::Participant& participant,
-                                                              std::shared_ptr<const localise::Localiser> localiser,
-                                                              const link::LinkTopics& topics,
-                                                              const LocalisationServerOptions& options = {});
+  static StatusOr<std::unique_ptr<LocalisationServer>> create(
+      link::Participant& participant, std::shared_ptr<const localise::Localiser> localiser,
+      const link::LinkTopics& topics, const LocalisationServerOptions& options = {});
   ~LocalisationServer();
 
   /// Starts the serving thread (once).
@@ -55,7 +54,8 @@ class LocalisationServer {
 
  private:
   struct Dds;
-  LocalisationServer(std::shared_ptr<const localise::Localiser> localiser, const LocalisationServerOptions& options);
+  LocalisationServer(std::shared_ptr<const localise::Localiser> localiser,
+                     const LocalisationServerOptions& options);
   void serve();
   /// Takes what arrived into the queue (answering the malformed and the excess at once).
   void take_arrivals();

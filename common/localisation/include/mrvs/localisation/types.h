@@ -28,14 +28,24 @@ struct PriorRegion {
   double radius_m = 0.0;           ///< > 0
 };
 
+/// Where a run of consecutive submap points was seen from: the cloud checks that the line of
+/// sight from there to each point crosses no surface of the map (free space) under a pose.
+struct Viewpoint {
+  Eigen::Vector3f position = Eigen::Vector3f::Zero();  ///< camera centre minus anchor_o, odometry frame, m
+  std::uint32_t count = 0;                             ///< points seen from it, following the previous runs
+};
+
 /// Edge -> cloud: one localisation attempt.
 struct Request {
-  std::uint64_t seq = 0;                 ///< per client, increasing
-  TimestampNs stamp_ns = 0;              ///< time of the anchor (IMU clock)
-  Vec3d gravity_o = Vec3d(0, 0, -1);     ///< unit direction of gravity in the odometry frame
-  Vec3d anchor_o = Vec3d::Zero();        ///< odometry-frame point the submap points are relative to, m
-  std::vector<Eigen::Vector3f> points;   ///< submap points minus anchor_o, odometry frame, m
-  std::optional<PriorRegion> prior;      ///< where anchor_o lies in the map
+  std::uint64_t seq = 0;                ///< per client, increasing
+  TimestampNs stamp_ns = 0;             ///< time of the anchor (IMU clock)
+  Vec3d gravity_o = Vec3d(0, 0, -1);    ///< unit direction of gravity in the odometry frame
+  Vec3d anchor_o = Vec3d::Zero();       ///< odometry-frame point the submap points are relative to, m
+  std::vector<Eigen::Vector3f> points;  ///< submap points minus anchor_o, odometry frame, m
+  std::optional<PriorRegion> prior;     ///< where anchor_o lies in the map
+  /// The points' viewpoints in point order (counts sum to at most points.size(); points after
+  /// them have none). Empty: no free-space check.
+  std::vector<Viewpoint> viewpoints;
 };
 
 enum class Status : std::uint8_t {
@@ -46,7 +56,7 @@ enum class Status : std::uint8_t {
   kBadRequest,          ///< malformed: too few or too many points, non-finite values, bad gravity or prior
   kMapUnavailable,      ///< the cloud has no map to search
   kServerError,
-  kBusy,                ///< the cloud has too many requests queued: ask again later
+  kBusy,  ///< the cloud has too many requests queued: ask again later
 };
 
 /// Short name ("ok", "too little structure", ...).
@@ -55,14 +65,16 @@ const char* status_name(Status status);
 /// Cloud -> edge: the answer to one request.
 struct Result {
   Status status = Status::kServerError;
-  std::string detail;     ///< why (human-readable)
-  SE3d T_m_o;             ///< valid for kOk (and the best guess for kAmbiguous)
+  std::string detail;                ///< why (human-readable)
+  SE3d T_m_o;                        ///< valid for kOk (and the best guess for kAmbiguous)
   Mat6d covariance = Mat6d::Zero();  ///< of [rho; phi] about the anchor (see above)
-  double fitness = 0.0;   ///< share of the submap's points on the map's surface at T_m_o, [0, 1]
-  double rmse_m = 0.0;    ///< point-to-plane residual of those points, m
-  double ambiguity = 0.0; ///< the best distinct other pose's structure score / the best's, [0, 1] (1: as good)
-  int hypotheses = 0;     ///< distinct poses refined
-  double time_ms = 0.0;   ///< registration time on the cloud
+  double fitness = 0.0;              ///< share of the submap's points on the map's surface at T_m_o, [0, 1]
+  double rmse_m = 0.0;               ///< point-to-plane residual of those points, m
+  double ambiguity =
+      0.0;               ///< the best distinct other pose's structure score / the best's, [0, 1] (1: as good)
+  int hypotheses = 0;    ///< distinct poses refined
+  double blocked = 0.0;  ///< share of the lines of sight that cross the map's surfaces at T_m_o
+  double time_ms = 0.0;  ///< registration time on the cloud
 };
 
 }  // namespace mrvs::localisation

@@ -4,9 +4,10 @@
 // gathers a submap in o (the triangulated feature tracks, or dense stereo), asks the cloud
 // where it lies in the map, and decides which answer to trust:
 //   - an answer must be "ok" with an ambiguity at most max_ambiguity;
-//   - answers_needed answers from different submaps must agree (their T_m_o, within their
-//     covariances plus a floor) before the newest is used: one wrong lock from a
-//     self-similar place is not enough;
+//   - answers_needed answers from independent submaps (their data overlapping by at most
+//     max_overlap) must agree (their T_m_o, within their covariances plus a floor) before the
+//     newest is used: one wrong lock, or the same wrong lock twice from the same data, is not
+//     enough;
 //   - a refused or disagreeing answer makes the next submap longer (up to max_window_s);
 //   - a request unanswered after timeout_s (wall clock) is given up and asked again.
 // Timing in the sensor clock (frame times) except the reply timeout (steady clock).
@@ -20,34 +21,38 @@
 #include "mrvs/config/options.h"
 #include "mrvs/edge/feature_observation.h"
 #include "mrvs/edge/map_service.h"
+#include "mrvs/io/types.h"
 #include "mrvs/localisation/types.h"
 
 namespace mrvs::edge {
 
 struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
-  std::string submap_source = "tracks";  ///< tracks | dense_stereo
-  double first_request_s = 1.0;          ///< after initialisation, s
-  double window_s = 1.5;                 ///< the submap holds the points of this long, s
-  double max_window_s = 6.0;             ///< ... growing to this after refusals, s
-  double interval_s = 1.0;               ///< between requests (after the last reply), s
-  double timeout_s = 3.0;                ///< a request unanswered this long (wall clock) is asked again, s
-  double max_range_m = 8.0;              ///< submap points farther from the anchor are left out, m
-  double voxel_m = 0.04;                 ///< one submap point per cell of this size, m
-  int max_points = 6000;                 ///< submap points sent at most (<= 10000, 6 B each)
-  int min_points = 150;                  ///< fewer: wait for more
-  double quantum_m = 0.005;              ///< wire quantisation of the points, m
-  double max_ambiguity = 0.8;            ///< answers more ambiguous are refused
-  int answers_needed = 2;                ///< agreeing answers before one is used
-  double agree_floor_m = 0.05;           ///< agreement: covariance plus this, m
-  double agree_floor_deg = 0.5;          ///< ... and this, deg
-  double dense_interval_s = 0.25;        ///< dense_stereo: one stereo pair per this, s
-  double gnss_sigmas = 3.0;              ///< prior region: this many GNSS sigmas ...
-  double gnss_margin_m = 2.0;            ///< ... plus the antenna lever arm plus this, m
+  std::string submap_source = "both";  ///< tracks | dense_stereo | both
+  double first_request_s = 1.0;        ///< after initialisation, s
+  double window_s = 1.5;               ///< the submap holds the points of this long, s
+  double max_window_s = 6.0;           ///< ... growing to this after refusals, s
+  double interval_s = 1.0;             ///< between requests (after the last reply), s
+  double timeout_s = 3.0;              ///< a request unanswered this long (wall clock) is asked again, s
+  double max_range_m = 8.0;            ///< submap points farther from the anchor are left out, m
+  double voxel_m = 0.04;               ///< one submap point per cell of this size, m
+  int max_points = 6000;               ///< submap points sent at most (<= 10000, 6 B each)
+  int min_points = 150;                ///< fewer: wait for more
+  double quantum_m = 0.005;            ///< wire quantisation of the points, m
+  double max_ambiguity = 0.8;          ///< answers more ambiguous are refused
+  int answers_needed = 2;              ///< agreeing answers before one is used
+  double max_overlap = 0.5;            ///< share of a submap's time span another may share and count
+  double agree_floor_m = 0.05;         ///< agreement: covariance plus this, m
+  double agree_floor_deg = 0.5;        ///< ... and this, deg
+  double dense_interval_s = 0.25;      ///< dense_stereo: one stereo pair per this, s
+  double viewpoint_interval_s = 0.25;  ///< points seen within this share one viewpoint, s
+  double gnss_sigmas = 3.0;            ///< prior region: this many GNSS sigmas ...
+  double gnss_margin_m = 2.0;          ///< ... plus the antenna lever arm plus this, m
 
   template <class V>
   void visit(V& v) {
     using namespace mrvs::config::constraints;
-    v("submap_source", submap_source, one_of({"tracks", "dense_stereo"}), "submap points: tracks | dense_stereo");
+    v("submap_source", submap_source, one_of({"tracks", "dense_stereo", "both"}),
+      "submap points: tracks | dense_stereo");
     v("first_request_s", first_request_s, in_range(0.0, 600.0), "first request after initialisation, s");
     v("window_s", window_s, in_range(0.1, 600.0), "submap time span, s");
     v("max_window_s", max_window_s, in_range(0.1, 600.0), "longest submap time span, s");
@@ -60,20 +65,33 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
     v("quantum_m", quantum_m, in_range(0.0001, 1.0), "wire quantisation of the points, m");
     v("max_ambiguity", max_ambiguity, in_range(0.0, 1.0), "most ambiguous answer accepted");
     v("answers_needed", answers_needed, in_range(1, 10), "agreeing answers before one is used");
+    v("max_overlap", max_overlap, in_range(0.0, 1.0), "time share two agreeing submaps may have in common");
     v("agree_floor_m", agree_floor_m, in_range(0.0, 100.0), "agreement floor, m");
     v("agree_floor_deg", agree_floor_deg, in_range(0.0, 180.0), "agreement floor, deg");
     v("dense_interval_s", dense_interval_s, in_range(0.01, 100.0), "dense stereo: time between pairs, s");
+    v("viewpoint_interval_s", viewpoint_interval_s, in_range(0.01, 100.0),
+      "points seen within this share one viewpoint (<= 64 per request), s");
     v("gnss_sigmas", gnss_sigmas, in_range(0.0, 100.0), "prior radius in GNSS sigmas");
     v("gnss_margin_m", gnss_margin_m, in_range(0.0, 10000.0), "prior radius margin, m");
   }
 };
 
+/// The prior region from GNSS fixes (antenna positions, map frame) around t_ns (IMU clock):
+/// the per-axis median of the fixes within window_s before it (robust to the odd multipath
+/// outlier), and a radius of gnss_sigmas times the larger sigma, plus the antenna's lever arm
+/// (the heading that would turn it is not known yet) and gnss_margin_m. nullopt without a fix
+/// in the window.
+std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix>& fixes, TimestampNs t_ns,
+                                                    double window_s, double lever_arm_m,
+                                                    const LocalisationOptions& options);
+
 /// An accepted answer: the odometry frame in the map.
 struct Alignment {
   SE3d T_m_o;
-  Mat6d covariance = Mat6d::Zero();   ///< [rho; phi] about anchor_m (mrvs/localisation/types.h)
+  Mat6d covariance = Mat6d::Zero();  ///< [rho; phi] about anchor_m (mrvs/localisation/types.h)
   Vec3d anchor_m = Vec3d::Zero();
-  TimestampNs t_ns = 0;               ///< anchor time of the submap
+  TimestampNs t_ns = 0;     ///< anchor time of the submap
+  TimestampNs from_ns = 0;  ///< its data began here
   double fitness = 0.0;
   double ambiguity = 0.0;
 };
@@ -88,7 +106,7 @@ struct LocalisationFrameStats {
   double rtt_ms = 0.0;    ///< of the reply taken this frame
   double cloud_ms = 0.0;  ///< the cloud's registration time of that reply
   int timeouts = 0;
-  std::string reply;      ///< "<status>: <detail>" of the reply taken, if any
+  std::string reply;  ///< "<status>: <detail>" of the reply taken, if any
   bool accepted = false;
 };
 
@@ -99,10 +117,12 @@ class MapLocaliser {
   /// Forgets the submap, the candidates and the request in flight (a filter restart: a new
   /// odometry frame).
   void reset();
-  /// Points seen at t_ns (odometry frame), e.g. one dense stereo pair.
-  void add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o);
-  /// A feature's latest position estimate (odometry frame) at t_ns; replaces its earlier one.
-  void set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o);
+  /// Points seen at t_ns (odometry frame) from the camera centre `viewpoint_o`, e.g. one dense
+  /// stereo pair.
+  void add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o, const Vec3d& viewpoint_o);
+  /// A feature's latest position estimate (odometry frame) at t_ns, seen from `viewpoint_o`;
+  /// replaces its earlier one.
+  void set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o, const Vec3d& viewpoint_o);
   /// Whether a dense stereo pair at t_ns is wanted (dense_stereo source, dense_interval_s).
   bool wants_dense(TimestampNs t_ns) const;
 
@@ -123,18 +143,25 @@ class MapLocaliser {
   using Clock = std::chrono::steady_clock;
   struct Pending {
     std::uint64_t seq = 0;
+    TimestampNs from_ns = 0;  ///< the submap's data: [from_ns, t_ns]
     TimestampNs t_ns = 0;
     Vec3d anchor_o = Vec3d::Zero();
     Clock::time_point sent;
   };
   std::optional<Alignment> handle(const LocalisationReply& reply, LocalisationFrameStats* stats);
   bool agree(const Alignment& earlier, const Alignment& later) const;
+  /// Their submaps share at most max_overlap of the shorter one's time span.
+  bool independent(const Alignment& a, const Alignment& b) const;
   void refuse(const std::string& why);
   void forget_before(TimestampNs t_ns);
 
   LocalisationOptions options_;
-  std::deque<std::pair<TimestampNs, std::vector<Vec3d>>> dense_;
-  std::map<FeatureId, std::pair<TimestampNs, Vec3d>> tracks_;
+  struct Seen {
+    TimestampNs t_ns = 0;
+    Vec3d viewpoint_o = Vec3d::Zero();
+  };
+  std::deque<std::pair<Seen, std::vector<Vec3d>>> dense_;
+  std::map<FeatureId, std::pair<Seen, Vec3d>> tracks_;
   std::optional<Pending> pending_;
   std::vector<Alignment> candidates_;  ///< agreeing answers so far
   std::optional<TimestampNs> first_ns_;

@@ -76,7 +76,7 @@ struct EstimatorTiming {
 struct FrameOutput {
   TimestampNs t_ns = 0;  ///< camera time of the frame
   bool initialized = false;
-  int run = 0;  ///< filter run: 1 from the first initialisation, +1 after each restart
+  int run = 0;                ///< filter run: 1 from the first initialisation, +1 after each restart
   std::optional<SE3d> T_w_b;  ///< IMU pose at the frame (IMU clock t_ns + t_d), in the frame below
   /// T_w_b is in the map frame (else the odometry frame: alignment.source map before the
   /// cloud placed the filter, or after a restart until it does again).
@@ -119,9 +119,9 @@ class VioEstimator {
   /// the filter is plain VIO.
   void set_map_service(MapService* service) { map_ = service; }
 
-  /// Where the cloud should look for the filter (outdoors: from GNSS), used by the next
-  /// localisation requests; nullopt: anywhere in the map.
-  void set_prior_region(const std::optional<localisation::PriorRegion>& prior) { prior_ = prior; }
+  /// A GNSS fix (antenna position in the map frame, IMU clock): only the prior region of the
+  /// localisation requests comes from it. `T_b_antenna` is where the antenna sits on the body.
+  void feed_gnss(const io::GnssFix& fix, const SE3d& T_b_antenna);
   /// Whether the submap wants a dense stereo pair of the frame at t_cam_ns.
   bool wants_dense_submap(TimestampNs t_cam_ns) const;
   /// Dense stereo points (cam0 frame, m) of the newest frame, fed after feed_frame() for it.
@@ -146,7 +146,8 @@ class VioEstimator {
   Status start(const InitializationResult& init, const FeatureFrame& frame);
   StatusOr<FrameOutput> track(const FeatureFrame& frame);
   /// `triangulated` receives the MSCKF features' triangulated points (for the submap).
-  void update(const FeatureFrame& frame, FrameOutput* out, std::vector<std::pair<FeatureId, Vec3d>>* triangulated);
+  void update(const FeatureFrame& frame, FrameOutput* out,
+              std::vector<std::pair<FeatureId, Vec3d>>* triangulated);
   void update_points(const FeatureFrame& frame, const std::vector<FeatureId>& point_ids, bool use_map,
                      FrameOutput* out);
   void marginalize(TimestampNs marg_ns, FrameOutput* out);
@@ -172,7 +173,8 @@ class VioEstimator {
   MapStage map_stage_;
   MapService* map_ = nullptr;
   MapLocaliser localiser_;
-  std::optional<localisation::PriorRegion> prior_;
+  std::deque<io::GnssFix> gnss_;  ///< the last max_window_s of fixes
+  double gnss_lever_arm_m_ = 0.0;
   bool in_map_frame_ = false;  ///< the state is in the map frame (aligned at start or localised)
   RegisteredMap registered_;
   SurfaceMap surfaces_;  ///< every map point the cloud answered (stage1_mode plane's planes)
@@ -181,6 +183,8 @@ class VioEstimator {
   MapStage::Clock::time_point deadline_;
   bool map_answering_ = false;  ///< the cloud answered the last request (else: triangulated points)
   std::optional<State> state_;
+  /// The last IMU pose of the previous filter run: a restart's odometry frame continues from it.
+  std::optional<SE3d> last_pose_;
   ImuState imu_fej_;  ///< first estimate of the IMU at the newest clone (before its update)
   FeatureDatabase db_;
   std::deque<io::ImuSample> imu_;

@@ -10,8 +10,8 @@
 
 #include "mrvs/core/status.h"
 #include "mrvs/core/time.h"
-#include "mrvs/localisation/types.h"
 #include "mrvs/geometry/types.h"
+#include "mrvs/localisation/types.h"
 #include "mrvs/voxel/ray_query.h"
 
 namespace mrvs::edge {
@@ -52,7 +52,8 @@ class MapService {
   virtual bool offers_localisation() { return false; }
   /// Sends `request` (points quantised to `quantum_m`) without waiting; the payload bytes
   /// sent, or why it could not be sent.
-  virtual StatusOr<std::size_t> send_localisation(const localisation::Request& /*request*/, float /*quantum_m*/) {
+  virtual StatusOr<std::size_t> send_localisation(const localisation::Request& /*request*/,
+                                                  float /*quantum_m*/) {
     return absl::UnimplementedError("this map service has no localisation");
   }
   /// The replies that arrived since the last call (each once).

@@ -16,8 +16,8 @@
 #include "mrvs/core/status.h"
 #include "mrvs/core/time.h"
 #include "mrvs/link/codec.h"
-#include "mrvs/localisation/types.h"
 #include "mrvs/link/participant.h"
+#include "mrvs/localisation/types.h"
 #include "mrvs/voxel/ray_query.h"
 
 namespace mrvs::edge {

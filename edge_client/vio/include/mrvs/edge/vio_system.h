@@ -40,14 +40,15 @@ struct EdgeOptions : config::OptionsEquality<EdgeOptions> {
   void visit(V& v) {
     v.section("calibration", calibration, "calibration files");
     v.section("tracker", tracker, "front-end");
-    v.section("dense_stereo", dense_stereo, "dense stereo (localisation submaps, estimator.localisation.submap_source)");
+    v.section("dense_stereo", dense_stereo,
+              "dense stereo (localisation submaps, estimator.localisation.submap_source)");
     v.section("estimator", estimator, "filter");
   }
 };
 
 struct StereoOutput {
-  TrackedFrame tracked;  ///< features, tracker statistics, timing (a) and (b)
-  FrameOutput estimate;  ///< pose, filter statistics, timing (c)
+  TrackedFrame tracked;   ///< features, tracker statistics, timing (a) and (b)
+  FrameOutput estimate;   ///< pose, filter statistics, timing (c)
   double dense_ms = 0.0;  ///< dense stereo for the localisation submap (part of timing (a))
 };
 
@@ -57,6 +58,8 @@ class VioSystem {
                                     io::Trajectory groundtruth = {});
 
   Status feed_imu(const io::ImuSample& sample) { return estimator_.feed_imu(sample); }
+  /// A GNSS fix (the localisation's prior region only; VioEstimator::feed_gnss).
+  void feed_gnss(const io::GnssFix& fix, const SE3d& T_b_antenna) { estimator_.feed_gnss(fix, T_b_antenna); }
   /// One stereo pair (cam0, cam1; CV_8UC1 of the calibrated sizes) taken at t_ns (camera
   /// clock). The IMU must cover t_ns (VioEstimator::feed_frame).
   StatusOr<StereoOutput> feed_stereo(TimestampNs t_ns, const cv::Mat& left, const cv::Mat& right);

@@ -13,8 +13,9 @@ namespace mrvs::link {
 
 /// Points farther than 32767 quanta from the anchor on an axis are left out (counted in
 /// *dropped), as are points beyond MAX_SUBMAP_POINTS.
-wire::LocalisationRequest encode_localisation_request(std::uint32_t client_id, const localisation::Request& request,
-                                                      float quantum_m, std::size_t* dropped = nullptr);
+wire::LocalisationRequest encode_localisation_request(std::uint32_t client_id,
+                                                      const localisation::Request& request, float quantum_m,
+                                                      std::size_t* dropped = nullptr);
 /// The request as the cloud's localiser takes it; InvalidArgument naming the field for another
 /// protocol version, a quantum that is not a finite positive number, too many points, a
 /// non-finite anchor, gravity or prior.
@@ -24,8 +25,8 @@ StatusOr<localisation::Request> decode_localisation_request(const wire::Localisa
 wire::LocalisationReply encode_localisation_reply(const wire::LocalisationRequest& request,
                                                   const localisation::Result& result);
 /// A reply that refuses `request` (status, detail) without a pose.
-wire::LocalisationReply refuse_localisation(const wire::LocalisationRequest& request, localisation::Status status,
-                                            const std::string& detail);
+wire::LocalisationReply refuse_localisation(const wire::LocalisationRequest& request,
+                                            localisation::Status status, const std::string& detail);
 /// DataLoss for another protocol version, a non-unit quaternion, non-finite values.
 StatusOr<localisation::Result> decode_localisation_reply(const wire::LocalisationReply& reply);
 

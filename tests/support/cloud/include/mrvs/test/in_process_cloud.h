@@ -17,7 +17,8 @@ namespace mrvs::test {
 class InProcessCloud : public edge::MapService {
  public:
   /// `localiser` may be null (no localisation service).
-  InProcessCloud(std::shared_ptr<const map::QueryEngine> engine, std::shared_ptr<const localise::Localiser> localiser);
+  InProcessCloud(std::shared_ptr<const map::QueryEngine> engine,
+                 std::shared_ptr<const localise::Localiser> localiser);
 
   std::optional<edge::MapDescription> description() override;
   edge::MapReply query(const std::vector<voxel::RayQuery>& rays, TimestampNs stamp_ns, DurationNs timeout,
