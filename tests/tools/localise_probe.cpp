@@ -11,8 +11,11 @@
 // Exit codes: 0 done, 1 data error, 2 usage error.
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
+#include <sstream>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -40,6 +43,7 @@ struct Args {
   std::vector<std::string> overrides, map_overrides;
   bool per_request = false;
   std::string dump;
+  std::string replay;
   bool until_localised = false;
   int frames = 0;
   std::string log_level = "warn";
@@ -89,7 +93,9 @@ Error pose_error(const SE3d& est, const SE3d& truth) {
 }
 
 /// req_<seq>.txt: "TRUE" and "ANSWER" 4x4 rows of T_map_odom, "ANCHOR x y z" (odometry),
-/// then "P x y z" per point (relative to the anchor) and "V x y z count" per viewpoint.
+/// "GRAVITY x y z" (odometry), "PRIOR x y z radius" (map, when the request had one), then
+/// "P x y z" per point (relative to the anchor) and "V x y z count" per viewpoint. --replay
+/// reads these back.
 void dump_request(const std::string& dir, const mrvs::test::InProcessCloud::Exchange& x, const SE3d& truth) {
   std::filesystem::create_directories(dir);
   std::FILE* f = std::fopen(fmt::format("{}/req_{}.txt", dir, x.request.seq).c_str(), "w");
@@ -98,13 +104,95 @@ void dump_request(const std::string& dir, const mrvs::test::InProcessCloud::Exch
   for (int i = 0; i < 4; ++i) fmt::print(f, "TRUE {} {} {} {}\n", t(i, 0), t(i, 1), t(i, 2), t(i, 3));
   for (int i = 0; i < 4; ++i) fmt::print(f, "ANSWER {} {} {} {}\n", r(i, 0), r(i, 1), r(i, 2), r(i, 3));
   fmt::print(f, "ANCHOR {} {} {}\n", x.request.anchor_o.x(), x.request.anchor_o.y(), x.request.anchor_o.z());
+  const auto& g = x.request.gravity_o;
+  fmt::print(f, "GRAVITY {} {} {}\n", g.x(), g.y(), g.z());
+  if (const auto& pr = x.request.prior)
+    fmt::print(f, "PRIOR {} {} {} {}\n", pr->centre_m.x(), pr->centre_m.y(), pr->centre_m.z(), pr->radius_m);
   for (const auto& p : x.request.points) fmt::print(f, "P {} {} {}\n", p.x(), p.y(), p.z());
   for (const auto& v : x.request.viewpoints)
     fmt::print(f, "V {} {} {} {}\n", v.position.x(), v.position.y(), v.position.z(), v.count);
   std::fclose(f);
 }
 
+/// A request written by dump_request and its true T_map_odom; nullopt when unreadable.
+struct Dumped {
+  mrvs::localisation::Request request;
+  SE3d truth;
+};
+
+std::optional<Dumped> read_dump(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
+  Dumped d;
+  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
+  int true_rows = 0;
+  std::string key;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    ls >> key;
+    double x = 0, y = 0, z = 0, w = 0;
+    ls >> x >> y >> z;
+    if (key == "TRUE" && true_rows < 4) {
+      ls >> w;
+      t.row(true_rows++) << x, y, z, w;
+    } else if (key == "ANCHOR") {
+      d.request.anchor_o = {x, y, z};
+    } else if (key == "GRAVITY") {
+      d.request.gravity_o = {x, y, z};
+    } else if (key == "PRIOR" && (ls >> w)) {
+      d.request.prior = mrvs::localisation::PriorRegion{{x, y, z}, w};
+    } else if (key == "P") {
+      d.request.points.emplace_back(x, y, z);
+    } else if (key == "V") {
+      std::uint32_t count = 0;
+      ls >> count;
+      d.request.viewpoints.push_back({Eigen::Vector3f(x, y, z), count});
+    }
+  }
+  if (true_rows != 4 || d.request.points.empty()) return std::nullopt;
+  d.truth = SE3d::from_matrix(t);
+  return d;
+}
+
+/// --replay: every dumped request of a folder localised again with the given cloud options;
+/// one line per request and the count of accepted and wrong answers.
+int replay(const Args& a) {
+  auto cloud = make_cloud(a);
+  if (!cloud.ok())
+    return fmt::print(stderr, "localise_probe: {}\n", std::string(cloud.status().message())),
+           mrvs::kExitUsageError;
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(a.replay)) {
+    if (e.path().filename().string().rfind("req_", 0) == 0) files.push_back(e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  int ok = 0, wrong = 0;
+  std::vector<double> ms;
+  for (const std::string& f : files) {
+    const auto d = read_dump(f);
+    if (!d) {
+      fmt::print(stderr, "localise_probe: {} is no request dump (see --dump)\n", f);
+      return mrvs::kExitDataError;
+    }
+    const auto r = cloud->localiser->localise(d->request);
+    const SE3d at(mrvs::Quatd::Identity(), d->request.anchor_o);
+    const Error e = pose_error(r.T_m_o * at, d->truth * at);
+    const bool is_ok = r.status == mrvs::localisation::Status::kOk;
+    ok += is_ok;
+    wrong += is_ok && (e.m > 0.1 || e.deg > 2.0);
+    ms.push_back(r.time_ms);
+    fmt::print("REPLAY {} status '{}' ambiguity {:.2f} fitness {:.2f} error {:.3f} m {:.2f} deg {:.0f} ms ({})\n",
+               f, mrvs::localisation::status_name(r.status), r.ambiguity, r.fitness, e.m, e.deg, r.time_ms,
+               r.detail);
+  }
+  fmt::print("REPLAYED: {}\nANSWERS_OK: {}\nANSWERS_OK_WRONG: {}\nCLOUD_MS_MEDIAN: {:.1f}\nCLOUD_MS_P95: {:.1f}\n",
+             files.size(), ok, wrong, mrvs::quantile(ms, 0.5), mrvs::quantile(ms, 0.95));
+  return mrvs::kExitOk;
+}
+
 int run(const Args& a) {
+  if (!a.replay.empty()) return replay(a);
   cv::setNumThreads(1);
   auto cfg = mrvs::config::load_yaml_with_overrides(a.config, a.overrides);
   if (!cfg.ok())
@@ -212,7 +300,10 @@ int main(int argc, char** argv) {
   CLI::App app{"Measures the cloud's localisation on a EuRoC folder with ground truth, in process.",
                "localise_probe"};
   Args a;
-  app.add_option("--dataset", a.dataset, "EuRoC folder with ground truth")->required();
+  auto* dataset = app.add_option("--dataset", a.dataset, "EuRoC folder with ground truth");
+  app.add_option("--replay", a.replay, "Localise the requests of a --dump folder again (no VIO)")
+      ->check(CLI::ExistingDirectory)
+      ->excludes(dataset);
   app.add_option("--map", a.map, "Voxel map (.mrvm)")->required()->check(CLI::ExistingFile);
   app.add_option("--config", a.config, "Edge tuning file (config/euroc.yaml)")
       ->required()
@@ -229,5 +320,9 @@ int main(int argc, char** argv) {
   app.add_flag("--until-localised", a.until_localised, "Stop at the first accepted answer");
   mrvs::add_log_level_option(app, a.log_level);
   if (auto exit_code = mrvs::parse_command_line(app, argc, argv, a.log_level)) return *exit_code;
+  if (a.dataset.empty() && a.replay.empty()) {
+    fmt::print(stderr, "localise_probe: give --dataset (a EuRoC folder) or --replay (a --dump folder)\n");
+    return mrvs::kExitUsageError;
+  }
   return run(a);
 }

@@ -221,26 +221,35 @@ struct Refined {
   Hypothesis pose;  ///< refined yaw and anchor; score = coarse score
   FineResult fine;
   double blocked = 0.0;  ///< share of the lines of sight through the map's surfaces
+  std::vector<std::uint8_t> blocked_lines;  ///< per line of sight: 1 through a surface
   /// What tells placements apart: the inliers on vertical surfaces (a floor fits anywhere at
   /// the right height), less for every line of sight the pose makes pass through a surface.
   double score = 0.0;
 };
 
+Refined refine_one(const Localiser::Impl& m, const Prepared& p, const LikelihoodPyramid& grid,
+                   const Hypothesis& h) {
+  const LocaliserOptions& o = m.options;
+  Refined r;
+  r.fine = refine_pose(m.surface, p.fine, h.yaw, h.anchor, fine_options(o));
+  r.pose = {r.fine.yaw, r.fine.anchor, h.score};
+  r.blocked_lines = blocked_lines(grid, p.sight, r.pose.yaw, r.pose.anchor, o.sight_start_m, o.sight_margin_m,
+                                  o.sight_margin_fraction);
+  r.blocked = p.sight.empty() ? 0.0
+                              : static_cast<double>(std::count(r.blocked_lines.begin(), r.blocked_lines.end(), 1)) /
+                                    static_cast<double>(p.sight.size());
+  r.score = r.fine.structure * std::max(0.0, 1.0 - o.blocked_weight * r.blocked);
+  return r;
+}
+
 std::vector<Refined> refine_all(const Localiser::Impl& m, const Prepared& p, const LikelihoodPyramid& grid,
                                 const std::vector<Hypothesis>& coarse) {
-  const LocaliserOptions& o = m.options;
-  const FineOptions fo = fine_options(o);
   SearchOptions converged;
   converged.distinct_m = kSameM;
   converged.distinct_rad = kSameRad;
   std::vector<Refined> out;
   for (const Hypothesis& h : coarse) {
-    Refined r;
-    r.fine = refine_pose(m.surface, p.fine, h.yaw, h.anchor, fo);
-    r.pose = {r.fine.yaw, r.fine.anchor, h.score};
-    r.blocked = blocked_share(grid, p.sight, r.pose.yaw, r.pose.anchor, o.sight_start_m, o.sight_margin_m,
-                              o.sight_margin_fraction);
-    r.score = r.fine.structure * std::max(0.0, 1.0 - o.blocked_weight * r.blocked);
+    Refined r = refine_one(m, p, grid, h);
     const auto same = std::find_if(out.begin(), out.end(),
                                    [&](const Refined& x) { return same_pose(x.pose, r.pose, converged); });
     if (same == out.end()) {
@@ -268,6 +277,66 @@ std::optional<Mat6d> covariance(const FineResult& f, double inflation) {
   return c;
 }
 
+/// What tells the best pose from another: the evidence only one of them has. Per submap point
+/// its structure weight under the one less under the other (a wall point that lands on a wall
+/// under both tells nothing, however much it adds to both scores), and per line of sight one
+/// pose leaves clear and the other blocks, blocked_weight; each as a share of its count.
+struct Discord {
+  double best_only = 0.0;
+  double other_only = 0.0;
+};
+
+Discord discord(const Refined& best, const Refined& other, double line_weight) {
+  Discord d;
+  const std::vector<float>& eb = best.fine.evidence;
+  const std::vector<float>& eo = other.fine.evidence;
+  const std::size_t n = std::min(eb.size(), eo.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    d.best_only += std::max(0.0f, eb[i] - eo[i]);
+    d.other_only += std::max(0.0f, eo[i] - eb[i]);
+  }
+  if (n > 0) {
+    d.best_only /= static_cast<double>(n);
+    d.other_only /= static_cast<double>(n);
+  }
+  const std::size_t lines = std::min(best.blocked_lines.size(), other.blocked_lines.size());
+  int best_clear = 0, other_clear = 0;
+  for (std::size_t i = 0; i < lines; ++i) {
+    best_clear += !best.blocked_lines[i] && other.blocked_lines[i];
+    other_clear += best.blocked_lines[i] && !other.blocked_lines[i];
+  }
+  if (lines > 0) {
+    d.best_only += line_weight * best_clear / static_cast<double>(lines);
+    d.other_only += line_weight * other_clear / static_cast<double>(lines);
+  }
+  return d;
+}
+
+/// The distinct pose (farther than distinct_m or turned more than distinct_deg) the evidence
+/// tells least well from the best, and the ambiguity: its exclusive evidence over the best's,
+/// (other_only + floor) / (best_only + floor), at most 1; 1 when the best has less exclusive
+/// evidence than min_discordance (nothing tells the two apart). index 0: no such pose.
+struct Rival {
+  std::size_t index = 0;
+  double ambiguity = 0.0;
+};
+
+Rival strongest_rival(const std::vector<Refined>& refined, const LocaliserOptions& o) {
+  constexpr double kFloor = 0.005;
+  SearchOptions distinct;
+  distinct.distinct_m = o.distinct_m;
+  distinct.distinct_rad = o.distinct_deg * kDegToRad;
+  Rival rival;
+  for (std::size_t k = 1; k < refined.size(); ++k) {
+    if (same_pose(refined[k].pose, refined.front().pose, distinct)) continue;
+    const Discord d = discord(refined.front(), refined[k], o.blocked_weight);
+    const double a = d.best_only < o.min_discordance ? 1.0
+                                                     : std::min(1.0, (d.other_only + kFloor) / (d.best_only + kFloor));
+    if (rival.index == 0 || a > rival.ambiguity) rival = {k, a};
+  }
+  return rival;
+}
+
 Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p,
                const std::vector<Refined>& refined) {
   const LocaliserOptions& o = m.options;
@@ -279,12 +348,9 @@ Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p,
   r.rmse_m = best.fine.rmse_m;
   // The alternative: the best refined pose distinct from the best one (a neighbour within
   // distinct_m is the same place, a local minimum of the fine stage).
-  SearchOptions distinct;
-  distinct.distinct_m = o.distinct_m;
-  distinct.distinct_rad = o.distinct_deg * kDegToRad;
-  const auto alt = std::find_if(refined.begin() + 1, refined.end(),
-                                [&](const Refined& x) { return !same_pose(x.pose, best.pose, distinct); });
-  r.ambiguity = alt != refined.end() && best.score > 0 ? alt->score / best.score : 0.0;
+  const Rival rival = strongest_rival(refined, o);
+  const auto alt = rival.index > 0 ? refined.begin() + rival.index : refined.end();
+  r.ambiguity = rival.ambiguity;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(best.pose.yaw, Eigen::Vector3d::UnitZ()) * p.R_g;
   const Eigen::Vector3d anchor_m = best.pose.anchor + m.map->origin;
   r.T_m_o = SE3d(Quatd(R).normalized(), anchor_m - R * q.anchor_o);
@@ -308,11 +374,11 @@ Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p,
   if (r.ambiguity > o.max_ambiguity) {
     r.status = LStatus::kAmbiguous;
     r.detail = fmt::format(
-        "another pose {:.2f} m / {:.1f} deg away fits {:.0f} % as well (lines of sight blocked: {:.0f} % vs "
-        "{:.0f} %)",
+        "another pose {:.2f} m / {:.1f} deg away is told apart too weakly (ambiguity {:.2f}; structure "
+        "{:.2f} vs {:.2f}, lines of sight blocked: {:.0f} % vs {:.0f} %)",
         (alt->pose.anchor - best.pose.anchor).norm(),
-        yaw_difference(alt->pose.yaw, best.pose.yaw) * kRadToDeg, 100 * r.ambiguity, 100 * alt->blocked,
-        100 * best.blocked);
+        yaw_difference(alt->pose.yaw, best.pose.yaw) * kRadToDeg, r.ambiguity, alt->fine.structure,
+        best.fine.structure, 100 * alt->blocked, 100 * best.blocked);
     return r;
   }
   r.status = LStatus::kOk;

@@ -24,12 +24,16 @@ struct Linearised {
   int inliers = 0;
 };
 
+/// evidence: when given, filled with each point's structure weight (FineResult::evidence).
 Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points, double yaw,
-                     const Eigen::Vector3d& anchor, double max_distance, const FineOptions& o) {
+                     const Eigen::Vector3d& anchor, double max_distance, const FineOptions& o,
+                     std::vector<float>* evidence = nullptr) {
   Linearised L;
   const double reach = o.inlier_m + o.voxel_m;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  for (const Eigen::Vector3d& p : points) {
+  if (evidence) evidence->assign(points.size(), 0.0f);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
     const Eigen::Vector3d x = R * p + anchor;
     const auto nb = surface.nearest(x.cast<float>(), static_cast<float>(std::max(max_distance, reach)));
     if (!nb) continue;
@@ -51,6 +55,7 @@ Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3
     L.information.noalias() += J.transpose() * J;
     L.sum_r2 += r * r;
     L.structure += n.head<2>().norm();
+    if (evidence) (*evidence)[i] = static_cast<float>(n.head<2>().norm());
     ++L.with_normal;
   }
   return L;
@@ -85,7 +90,7 @@ FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vecto
     out.iterations = it + 1;
     if (s >= 1.0 && dx.head<3>().norm() < 1e-5 && std::abs(dx(3)) < 1e-6) break;
   }
-  const Linearised L = linearise(surface, points, out.yaw, out.anchor, o.end_distance_m, o);
+  const Linearised L = linearise(surface, points, out.yaw, out.anchor, o.end_distance_m, o, &out.evidence);
   out.information = L.information;
   out.inliers = L.inliers;
   out.fitness = points.empty() ? 0.0 : static_cast<double>(L.inliers) / static_cast<double>(points.size());

@@ -40,6 +40,9 @@ struct FineResult {
   Eigen::Matrix4d information = Eigen::Matrix4d::Zero();
   int inliers = 0;
   int iterations = 0;
+  /// Per point, in order: its share of `structure` (|n_xy| when an inlier with a normal, else
+  /// 0). Two placements are told apart by the points that fit one and not the other.
+  std::vector<float> evidence;
 };
 
 /// Refines (yaw, anchor) from the given start.

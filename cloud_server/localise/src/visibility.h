@@ -4,6 +4,7 @@
 // the submap's walls on another room's walls (a turned, self-similar room) the lines to what
 // lies behind that room's boxes pass through them. The share of lines that do is what tells
 // such poses apart where the surfaces alone fit almost equally well.
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -24,5 +25,10 @@ struct SightLine {
 /// line that grazes it at a low angle do not count). 0 without lines.
 double blocked_share(const LikelihoodPyramid& grid, const std::vector<SightLine>& lines, double yaw,
                      const Eigen::Vector3d& anchor, double start_m, double margin_m, double margin_fraction);
+
+/// The same check per line, in order: 1 where the line crosses a surface, else 0.
+std::vector<std::uint8_t> blocked_lines(const LikelihoodPyramid& grid, const std::vector<SightLine>& lines,
+                                        double yaw, const Eigen::Vector3d& anchor, double start_m,
+                                        double margin_m, double margin_fraction);
 
 }  // namespace mrvs::localise

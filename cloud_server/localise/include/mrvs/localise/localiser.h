@@ -5,10 +5,12 @@
 //   1. coarse: branch-and-bound over (x, y, z, yaw) on a likelihood grid of the map's coarsest
 //      level, exact on the grid's lattice, keeping the best few mutually distinct poses;
 //   2. fine: 4-DoF point-to-plane ICP of each against a finer level (with normals);
-//   3. verify: fitness (share of the submap on the map's surface), ambiguity (the best distinct
-//      other pose's structure score over the best's: inliers on vertical surfaces, which tell placements
-//      apart where a floor does not), and the covariance from the fine stage's
-//      information matrix, inflated (registration covariances are optimistic).
+//   3. verify: fitness (share of the submap on the map's surface), ambiguity (best against the
+//      distinct other pose told least well from it: the evidence only that pose has over the
+//      evidence only the best has, counting submap points on vertical surfaces under one pose
+//      and not the other, and lines of sight one pose leaves clear and the other blocks), and
+//      the covariance from the fine stage's information matrix, inflated (registration
+//      covariances are optimistic).
 // Read-only after create(): localise() is thread-safe and runs on the calling thread.
 #include <memory>
 #include <string>
@@ -47,6 +49,7 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
   double inlier_m = 0.05;               ///< submap points this close to the map are on it, m
   double min_fitness = 0.5;             ///< less: outside the map
   double max_ambiguity = 0.8;           ///< more: ambiguous
+  double min_discordance = 0.03;        ///< less evidence only the best pose has: ambiguous
   int sight_lines = 600;                ///< lines of sight checked against the map per pose
   double sight_start_m = 0.2;           ///< ... from this far after their viewpoint ...
   double sight_margin_m = 0.15;         ///< ... to this far before their point, m ...
@@ -89,6 +92,8 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
     v("inlier_m", inlier_m, in_range(0.001, 100.0), "distance of a submap point on the map, m");
     v("min_fitness", min_fitness, in_range(0.0, 1.0), "least fitness of an answer");
     v("max_ambiguity", max_ambiguity, in_range(0.0, 1.0), "largest ambiguity of an answer");
+    v("min_discordance", min_discordance, in_range(0.0, 1.0),
+      "least evidence (share of the submap) only the best pose has over another distinct one");
     v("sight_lines", sight_lines, in_range(0, 100000),
       "lines of sight checked per pose (0: no free-space check)");
     v("sight_start_m", sight_start_m, in_range(0.0, 100.0),
