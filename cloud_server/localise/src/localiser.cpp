@@ -223,7 +223,9 @@ struct Refined {
   double blocked = 0.0;  ///< share of the lines of sight through the map's surfaces
   std::vector<std::uint8_t> blocked_lines;  ///< per line of sight: 1 through a surface
   /// What tells placements apart: the inliers on vertical surfaces (a floor fits anywhere at
-  /// the right height), less for every line of sight the pose makes pass through a surface.
+  /// the right height) less blocked_weight times the share of the lines of sight the pose
+  /// makes pass through a surface. Additive, so that the best score also has the most evidence
+  /// of its own against any other pose (strongest_rival's ratio stays at most 1).
   double score = 0.0;
 };
 
@@ -238,7 +240,7 @@ Refined refine_one(const Localiser::Impl& m, const Prepared& p, const Likelihood
   r.blocked = p.sight.empty() ? 0.0
                               : static_cast<double>(std::count(r.blocked_lines.begin(), r.blocked_lines.end(), 1)) /
                                     static_cast<double>(p.sight.size());
-  r.score = r.fine.structure * std::max(0.0, 1.0 - o.blocked_weight * r.blocked);
+  r.score = r.fine.structure - o.blocked_weight * r.blocked;
   return r;
 }
 
