@@ -4,13 +4,13 @@
 # Target (issue 3): median <= 60 s on a 2-core machine.
 #
 # Usage: scripts/bench_simulator.sh [RUNS] [extra dataset_simulator flags...]   (default 3 runs)
-# Environment: MRVS_SHARED_DIR (default ../shared next to the repository).
+# Environment: MRVS_SHARED_DIR (default tests/, which holds data/euroc_groundtruth/).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
 
 runs=${1:-3}
 shift || true
-traj=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}/data/euroc_groundtruth/V1_01_easy.txt
+traj=${MRVS_SHARED_DIR:-$MRVS_ROOT/tests}/data/euroc_groundtruth/V1_01_easy.txt
 [[ -f $traj ]] || { echo "bench_simulator.sh: missing $traj" >&2; exit 1; }
 
 mrvs_build --target dataset_simulator >/dev/null

@@ -15,7 +15,7 @@
 #                   this tree's binaries (same Debian 12 libraries; CI copies, it built them)
 #   --timeout S     longest wait for the client (default 900)
 #   --reuse-data    keep the sequence and map of an earlier run in OUT when both are there
-# Environment: MRVS_SHARED_DIR (default ../shared), MRVS_BUILD_DIR.
+# Environment: MRVS_SHARED_DIR (default tests/, which holds data/euroc_groundtruth/), MRVS_BUILD_DIR.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
 source "$MRVS_ROOT/scripts/lib/link_experiment.sh"  # value
@@ -38,7 +38,7 @@ if [[ $(id -u) -ne 0 ]]; then
   echo "  Fix: sudo scripts/containers.sh" >&2
   exit 1
 fi
-trajectory=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}/data/euroc_groundtruth/V1_01_easy.txt
+trajectory=${MRVS_SHARED_DIR:-$MRVS_ROOT/tests}/data/euroc_groundtruth/V1_01_easy.txt
 [[ -f $trajectory ]] || { echo "containers.sh: missing $trajectory (the shared EuRoC ground truth)" >&2; exit 1; }
 
 mkdir -p "$out"

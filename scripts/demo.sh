@@ -16,7 +16,7 @@
 #      trajectory plot (PNG).
 #
 # Usage: scripts/demo.sh [--out DIR] [--duration S]   (defaults: build/demo, 30 s)
-# Environment: MRVS_SHARED_DIR (default ../shared next to the repository).
+# Environment: MRVS_SHARED_DIR (default tests/, which holds data/euroc_groundtruth/).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
 source "$MRVS_ROOT/scripts/lib/link_experiment.sh"  # value
@@ -32,7 +32,7 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 
-trajectory=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}/data/euroc_groundtruth/V1_01_easy.txt
+trajectory=${MRVS_SHARED_DIR:-$MRVS_ROOT/tests}/data/euroc_groundtruth/V1_01_easy.txt
 [[ -f $trajectory ]] || { echo "demo.sh: missing $trajectory (the shared EuRoC ground truth)" >&2; exit 1; }
 
 mrvs_build --target demo_tools

@@ -14,7 +14,7 @@
 #   defaults: build/localisation_experiment, seed 2, 10 clips per trajectory, 12 s each,
 #   starts at 3 + (i + F) * (length - 18) / K s for i = 0..K-1 with F = 0.5 (seed 1 with
 #   F = 0 is the set the thresholds were tuned on: see edge_client/README.md).
-# Environment: MRVS_SHARED_DIR (default ../shared next to the repository).
+# Environment: MRVS_SHARED_DIR (default tests/, which holds data/euroc_groundtruth/).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
 source "$MRVS_ROOT/scripts/lib/link_experiment.sh"  # value
@@ -37,7 +37,7 @@ while [[ $# -gt 0 ]]; do
     *) echo "localisation_experiment.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
-shared=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}
+shared=${MRVS_SHARED_DIR:-$MRVS_ROOT/tests}
 [[ -d $shared/data/euroc_groundtruth ]] || { echo "localisation_experiment.sh: missing $shared/data/euroc_groundtruth" >&2; exit 1; }
 mrvs_build --target demo_tools
 bin=$MRVS_BUILD/bin

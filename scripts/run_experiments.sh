@@ -14,7 +14,7 @@
 #                                  [--edge-args "ARGS"]
 #   --quick   one 30 s indoor sequence (V1_01_easy), one seed, loopback link only
 #             (about 5 minutes here once built)
-#   default   every trajectory in ../shared/data/euroc_groundtruth/ full length plus the outdoor
+#   default   every trajectory in tests/data/euroc_groundtruth/ full length plus the outdoor
 #             profile on a 2.2 km route, seeds 1 2 3 (hours on this machine)
 #   --data    where the generated sequences and maps go (default OUT/data); a sequence folder
 #             <name>_seed<N> already there is used as it is
@@ -42,7 +42,7 @@ while [[ $# -gt 0 ]]; do
     *) echo "run_experiments.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
-shared=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}
+shared=${MRVS_SHARED_DIR:-$MRVS_ROOT/tests}
 [[ -d $shared/data/euroc_groundtruth ]] || { echo "run_experiments.sh: missing $shared/data/euroc_groundtruth" >&2; exit 1; }
 out=${out:-$MRVS_ROOT/results/$(date -u +%Y-%m-%d)$($quick && echo -quick)}
 if $quick; then seeds=${seeds:-1}; else seeds=${seeds:-"1 2 3"}; fi

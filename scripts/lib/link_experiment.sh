@@ -9,7 +9,7 @@ LINK_MAP=$LINK_DATA/V1_01_sim.mrvm
 # link_prepare: builds the tools and, unless present, a 15 s synthetic sequence and its map.
 link_prepare() {
   mrvs_build --target dataset_simulator map_builder cloud_server link_probe >/dev/null
-  local traj=${MRVS_SHARED_DIR:-$MRVS_ROOT/../shared}/data/euroc_groundtruth/V1_01_easy.txt
+  local traj=${MRVS_SHARED_DIR:-$MRVS_ROOT/tests}/data/euroc_groundtruth/V1_01_easy.txt
   if [[ ! -f $LINK_SEQUENCE/sim0/request.yaml ]]; then
     step "generating a 15 s sequence for the link ($LINK_SEQUENCE)"
     "$MRVS_BUILD/bin/dataset_simulator" --trajectory "$traj" --duration 15 --out "$LINK_SEQUENCE" --overwrite \

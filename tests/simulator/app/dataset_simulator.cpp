@@ -1,7 +1,7 @@
 // dataset_simulator: writes a synthetic EuRoC ASL sequence (stereo PNGs, IMU, ground truth,
 // prior LiDAR map) along a real or synthesised trajectory. See tests/simulator/README.md.
 //
-//   dataset_simulator --trajectory ../shared/data/euroc_groundtruth/V1_01_easy.txt
+//   dataset_simulator --trajectory tests/data/euroc_groundtruth/V1_01_easy.txt
 //       --profile indoor --duration 30 --seed 1 --out /tmp/seq
 //
 // Exit codes: 0 success, 1 data or output error (nothing is left at --out), 2 usage error.
@@ -39,7 +39,7 @@ struct Args {
 void add_options(CLI::App& app, Args& a) {
   app.add_option("--trajectory", a.trajectory,
                  "Trajectory to follow (indoor): TUM txt or EuRoC ground-truth csv, e.g. "
-                 "../shared/data/euroc_groundtruth/V1_01_easy.txt");
+                 "tests/data/euroc_groundtruth/V1_01_easy.txt");
   app.add_option("--profile", a.profile, "indoor (EuRoC rig, Vicon-like room) | outdoor (KAIST-like car rig)")
       ->capture_default_str()
       ->check(CLI::IsMember({"indoor", "outdoor"}));

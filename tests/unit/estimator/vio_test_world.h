@@ -14,7 +14,7 @@
 namespace mrvs::edge::test {
 
 struct SyntheticOptions {
-  std::string trajectory = "V1_01_easy.txt";  ///< in ../shared/data/euroc_groundtruth
+  std::string trajectory = "V1_01_easy.txt";  ///< in tests/data/euroc_groundtruth
   double start_s = 0.0;                       ///< window start (0: the static beginning)
   double duration_s = 20.0;
   std::string preset = "easy";

@@ -50,7 +50,7 @@ StatusOr<io::Trajectory> load_motion_input(const GeneratorRequest& r, World& wor
   if (r.trajectory.empty()) {
     return absl::InvalidArgumentError(
         "the indoor profile follows a trajectory file: give --trajectory (TUM txt or EuRoC ground-truth csv, "
-        "e.g. ../shared/data/euroc_groundtruth/V1_01_easy.txt)");
+        "e.g. tests/data/euroc_groundtruth/V1_01_easy.txt)");
   }
   io::Warnings warnings;
   auto input = io::read_trajectory(r.trajectory, {}, &warnings);

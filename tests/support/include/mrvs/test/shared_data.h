@@ -1,5 +1,5 @@
 #pragma once
-// Where the project's shared material is (../shared next to the repository by default;
+// Where the real EuRoC trajectories are (tests/data/euroc_groundtruth by default;
 // configure with -DMRVS_SHARED_DIR=<path> to point elsewhere).
 #include <filesystem>
 #include <string>

@@ -9,7 +9,7 @@
 
 namespace mrvs::test {
 
-/// A short indoor request along a real EuRoC trajectory (../shared/data/euroc_groundtruth):
+/// A short indoor request along a real EuRoC trajectory (tests/data/euroc_groundtruth):
 /// `duration_s` from `start_s`, the given preset, a coarse map (issue-7 tests do not use it).
 sim::GeneratorRequest indoor_sequence_request(const std::string& trajectory_file, double start_s,
                                               double duration_s, const std::string& preset);
