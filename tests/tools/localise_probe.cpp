@@ -182,12 +182,13 @@ int replay(const Args& a) {
     ok += is_ok;
     wrong += is_ok && (e.m > 0.1 || e.deg > 2.0);
     ms.push_back(r.time_ms);
-    fmt::print("REPLAY {} status '{}' ambiguity {:.2f} fitness {:.2f} error {:.3f} m {:.2f} deg {:.0f} ms ({})\n",
-               f, mrvs::localisation::status_name(r.status), r.ambiguity, r.fitness, e.m, e.deg, r.time_ms,
-               r.detail);
+    fmt::print(
+        "REPLAY {} status '{}' ambiguity {:.2f} fitness {:.2f} error {:.3f} m {:.2f} deg {:.0f} ms ({})\n", f,
+        mrvs::localisation::status_name(r.status), r.ambiguity, r.fitness, e.m, e.deg, r.time_ms, r.detail);
   }
-  fmt::print("REPLAYED: {}\nANSWERS_OK: {}\nANSWERS_OK_WRONG: {}\nCLOUD_MS_MEDIAN: {:.1f}\nCLOUD_MS_P95: {:.1f}\n",
-             files.size(), ok, wrong, mrvs::quantile(ms, 0.5), mrvs::quantile(ms, 0.95));
+  fmt::print(
+      "REPLAYED: {}\nANSWERS_OK: {}\nANSWERS_OK_WRONG: {}\nCLOUD_MS_MEDIAN: {:.1f}\nCLOUD_MS_P95: {:.1f}\n",
+      files.size(), ok, wrong, mrvs::quantile(ms, 0.5), mrvs::quantile(ms, 0.95));
   return mrvs::kExitOk;
 }
 

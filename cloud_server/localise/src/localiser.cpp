@@ -220,7 +220,7 @@ FineOptions fine_options(const LocaliserOptions& o) {
 struct Refined {
   Hypothesis pose;  ///< refined yaw and anchor; score = coarse score
   FineResult fine;
-  double blocked = 0.0;  ///< share of the lines of sight through the map's surfaces
+  double blocked = 0.0;                     ///< share of the lines of sight through the map's surfaces
   std::vector<std::uint8_t> blocked_lines;  ///< per line of sight: 1 through a surface
   /// What tells placements apart: the inliers on vertical surfaces (a floor fits anywhere at
   /// the right height) less blocked_weight times the share of the lines of sight the pose
@@ -237,9 +237,10 @@ Refined refine_one(const Localiser::Impl& m, const Prepared& p, const Likelihood
   r.pose = {r.fine.yaw, r.fine.anchor, h.score};
   r.blocked_lines = blocked_lines(grid, p.sight, r.pose.yaw, r.pose.anchor, o.sight_start_m, o.sight_margin_m,
                                   o.sight_margin_fraction);
-  r.blocked = p.sight.empty() ? 0.0
-                              : static_cast<double>(std::count(r.blocked_lines.begin(), r.blocked_lines.end(), 1)) /
-                                    static_cast<double>(p.sight.size());
+  r.blocked = p.sight.empty()
+                  ? 0.0
+                  : static_cast<double>(std::count(r.blocked_lines.begin(), r.blocked_lines.end(), 1)) /
+                        static_cast<double>(p.sight.size());
   r.score = r.fine.structure - o.blocked_weight * r.blocked;
   return r;
 }
@@ -332,8 +333,9 @@ Rival strongest_rival(const std::vector<Refined>& refined, const LocaliserOption
   for (std::size_t k = 1; k < refined.size(); ++k) {
     if (same_pose(refined[k].pose, refined.front().pose, distinct)) continue;
     const Discord d = discord(refined.front(), refined[k], o.blocked_weight);
-    const double a = d.best_only < o.min_discordance ? 1.0
-                                                     : std::min(1.0, (d.other_only + kFloor) / (d.best_only + kFloor));
+    const double a = d.best_only < o.min_discordance
+                         ? 1.0
+                         : std::min(1.0, (d.other_only + kFloor) / (d.best_only + kFloor));
     if (rival.index == 0 || a > rival.ambiguity) rival = {k, a};
   }
   return rival;

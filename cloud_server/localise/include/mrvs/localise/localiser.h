@@ -54,10 +54,10 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
   double sight_start_m = 0.2;           ///< ... from this far after their viewpoint ...
   double sight_margin_m = 0.15;         ///< ... to this far before their point, m ...
   double sight_margin_fraction = 0.15;  ///< ... plus this share of the line (lines grazing a surface)
-  double blocked_weight = 1.0;          ///< a pose's score (structure share) drops by this times its blocked share
-  double covariance_inflation = 25.0;   ///< variance factor on the information matrix's inverse
-  double max_sigma_m = 0.1;             ///< a less certain translation: too little structure, m
-  double max_sigma_deg = 1.0;           ///< a less certain yaw: too little structure, deg
+  double blocked_weight = 1.0;  ///< a pose's score (structure share) drops by this times its blocked share
+  double covariance_inflation = 25.0;  ///< variance factor on the information matrix's inverse
+  double max_sigma_m = 0.1;            ///< a less certain translation: too little structure, m
+  double max_sigma_deg = 1.0;          ///< a less certain yaw: too little structure, deg
 
   template <class V>
   void visit(V& v) {
