@@ -11,7 +11,7 @@
 # (scripts/lib/make_report.py).
 #
 # Usage: scripts/run_experiments.sh [--quick] [--out DIR] [--seeds "1 2 3"] [--data DIR] [--sequences "A B"]
-#                                  [--edge-args "ARGS"]
+#                                  [--edge-args "ARGS"] [--variants "V ..."]
 #   --quick   one 30 s indoor sequence (V1_01_easy), one seed, loopback link only
 #             (about 5 minutes here once built)
 #   default   every trajectory in tests/data/euroc_groundtruth/ full length plus the outdoor
@@ -21,15 +21,19 @@
 #   --sequences  only these (names of the trajectories, e.g. "V1_02_medium V2_01_easy", or outdoor)
 #   --edge-args  added to every edge_client run, e.g. "--stage1-mode ray_depth --set
 #             estimator.map.uncertainty_scale=2" (recorded in meta.txt and the report)
+#   --variants   only these runs per sequence (of: plain map map_start gt fixed), e.g. "map
+#             map_start" for the map-based start against the paper's; no link experiments
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
 
 quick=false
+link=true
 out=""
 seeds=""
 data=""
 only=""
 edge_args=""
+variants="plain map map_start gt fixed"
 while [[ $# -gt 0 ]]; do
   case $1 in
     --quick) quick=true; shift ;;
@@ -38,10 +42,15 @@ while [[ $# -gt 0 ]]; do
     --data) data=${2:?--data needs a folder}; shift 2 ;;
     --sequences) only=${2:?--sequences needs names}; shift 2 ;;
     --edge-args) edge_args=${2?--edge-args needs a (quoted) list}; shift 2 ;;
-    -h|--help) sed -n '2,20p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    --variants) variants=${2:?--variants needs a list}; link=false; shift 2 ;;
+    -h|--help) sed -n '2,22p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "run_experiments.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
+for v in $variants; do
+  [[ " plain map map_start gt fixed " == *" $v "* ]] || { echo "run_experiments.sh: --variants: no variant '$v' (plain map map_start gt fixed)" >&2; exit 2; }
+done
+wants() { [[ " $variants " == *" $1 "* ]]; }
 shared=${MRVS_SHARED_DIR:-$MRVS_ROOT/tests}
 [[ -d $shared/data/euroc_groundtruth ]] || { echo "run_experiments.sh: missing $shared/data/euroc_groundtruth" >&2; exit 1; }
 out=${out:-$MRVS_ROOT/results/$(date -u +%Y-%m-%d)$($quick && echo -quick)}
@@ -133,11 +142,11 @@ for entry in "${sequences[@]}"; do
     mkdir -p "$dir"
     echo "$seq/mav0/state_groundtruth_estimate0/data.csv" >"$dir/groundtruth.csv"
     paper=(--set estimator.alignment.source=gt_noisy)  # the paper's start: ground truth + 2 cm
-    run_variant "$seq" "$seq.mrvm" "$dir/plain" "$config" "$map_config" plain "${paper[@]}"
-    run_variant "$seq" "$seq.mrvm" "$dir/map" "$config" "$map_config" map "${paper[@]}"
-    run_variant "$seq" "$seq.mrvm" "$dir/map_start" "$config" "$map_config" map_start --realtime
-    run_variant "$seq" "$seq.mrvm" "$dir/gt" "$config" "$map_config" gt --query-pose-source gt "${paper[@]}"
-    [[ $profile == indoor ]] || continue  # outdoor: no level ablation (each run is minutes long)
+    ! wants plain || run_variant "$seq" "$seq.mrvm" "$dir/plain" "$config" "$map_config" plain "${paper[@]}"
+    ! wants map || run_variant "$seq" "$seq.mrvm" "$dir/map" "$config" "$map_config" map "${paper[@]}"
+    ! wants map_start || run_variant "$seq" "$seq.mrvm" "$dir/map_start" "$config" "$map_config" map_start --realtime
+    ! wants gt || run_variant "$seq" "$seq.mrvm" "$dir/gt" "$config" "$map_config" gt --query-pose-source gt "${paper[@]}"
+    [[ $profile == indoor ]] && wants fixed || continue  # outdoor: no level ablation (each run is minutes long)
     for r in $(awk -F': ' '/^LEVEL_[0-9]+_RESOLUTION_M:/ {print $2}' "$seq.map_builder.txt"); do
       run_variant "$seq" "$seq.mrvm" "$dir/fixed_$r" "$config" "$map_config" "fixed $r m" --fixed-resolution "$r" \
           "${paper[@]}"
@@ -145,7 +154,7 @@ for entry in "${sequences[@]}"; do
   done
 done
 
-if [[ $(id -u) -eq 0 ]] && ! $quick; then
+if [[ $(id -u) -eq 0 ]] && ! $quick && $link; then
   step "link experiments (two hosts, 1.66 MB/s)"
   mkdir -p "$out/link"
   "$MRVS_ROOT/scripts/two_hosts.sh" --frames 600 >"$out/link/two_hosts.txt"
@@ -159,6 +168,7 @@ fi
   echo "SEEDS: ${seeds// /,}"
   echo "SEQUENCES: $(printf '%s ' "${sequences[@]%% *}")"
   echo "EDGE_ARGS: ${edge_args:-none}"
+  echo "VARIANTS: ${variants// /,}"
   echo "FASTDDS: $(dpkg-query -W -f='${Version}' libfastrtps2.9 2>/dev/null || echo unknown)"
   echo "COMPILER: $(c++ --version | head -1 | tr ' ' '_')"
   echo "CPU_CORES: $(nproc)"

@@ -10,12 +10,9 @@
 //                  --map-config config/map_indoor.yaml [--set ...] [--until-localised]
 // Exit codes: 0 done, 1 data error, 2 usage error.
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <optional>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -32,6 +29,7 @@
 #include "mrvs/io/trajectory_io.h"
 #include "mrvs/map/map_file.h"
 #include "mrvs/test/in_process_cloud.h"
+#include "mrvs/tools/request_dump.h"
 
 namespace {
 
@@ -92,69 +90,6 @@ Error pose_error(const SE3d& est, const SE3d& truth) {
           std::abs(mrvs::edge::yaw_of(est * truth.inverse())) * mrvs::kRadToDeg};
 }
 
-/// req_<seq>.txt: "TRUE" and "ANSWER" 4x4 rows of T_map_odom, "ANCHOR x y z" (odometry),
-/// "GRAVITY x y z" (odometry), "PRIOR x y z radius" (map, when the request had one), then
-/// "P x y z" per point (relative to the anchor) and "V x y z count" per viewpoint. --replay
-/// reads these back.
-void dump_request(const std::string& dir, const mrvs::test::InProcessCloud::Exchange& x, const SE3d& truth) {
-  std::filesystem::create_directories(dir);
-  std::FILE* f = std::fopen(fmt::format("{}/req_{}.txt", dir, x.request.seq).c_str(), "w");
-  if (!f) return;
-  const Eigen::Matrix4d t = truth.matrix(), r = x.result.T_m_o.matrix();
-  for (int i = 0; i < 4; ++i) fmt::print(f, "TRUE {} {} {} {}\n", t(i, 0), t(i, 1), t(i, 2), t(i, 3));
-  for (int i = 0; i < 4; ++i) fmt::print(f, "ANSWER {} {} {} {}\n", r(i, 0), r(i, 1), r(i, 2), r(i, 3));
-  fmt::print(f, "ANCHOR {} {} {}\n", x.request.anchor_o.x(), x.request.anchor_o.y(), x.request.anchor_o.z());
-  const auto& g = x.request.gravity_o;
-  fmt::print(f, "GRAVITY {} {} {}\n", g.x(), g.y(), g.z());
-  if (const auto& pr = x.request.prior)
-    fmt::print(f, "PRIOR {} {} {} {}\n", pr->centre_m.x(), pr->centre_m.y(), pr->centre_m.z(), pr->radius_m);
-  for (const auto& p : x.request.points) fmt::print(f, "P {} {} {}\n", p.x(), p.y(), p.z());
-  for (const auto& v : x.request.viewpoints)
-    fmt::print(f, "V {} {} {} {}\n", v.position.x(), v.position.y(), v.position.z(), v.count);
-  std::fclose(f);
-}
-
-/// A request written by dump_request and its true T_map_odom; nullopt when unreadable.
-struct Dumped {
-  mrvs::localisation::Request request;
-  SE3d truth;
-};
-
-std::optional<Dumped> read_dump(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return std::nullopt;
-  Dumped d;
-  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
-  int true_rows = 0;
-  std::string key;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    ls >> key;
-    double x = 0, y = 0, z = 0, w = 0;
-    ls >> x >> y >> z;
-    if (key == "TRUE" && true_rows < 4) {
-      ls >> w;
-      t.row(true_rows++) << x, y, z, w;
-    } else if (key == "ANCHOR") {
-      d.request.anchor_o = {x, y, z};
-    } else if (key == "GRAVITY") {
-      d.request.gravity_o = {x, y, z};
-    } else if (key == "PRIOR" && (ls >> w)) {
-      d.request.prior = mrvs::localisation::PriorRegion{{x, y, z}, w};
-    } else if (key == "P") {
-      d.request.points.emplace_back(x, y, z);
-    } else if (key == "V") {
-      std::uint32_t count = 0;
-      ls >> count;
-      d.request.viewpoints.push_back({Eigen::Vector3f(x, y, z), count});
-    }
-  }
-  if (true_rows != 4 || d.request.points.empty()) return std::nullopt;
-  d.truth = SE3d::from_matrix(t);
-  return d;
-}
-
 /// --replay: every dumped request of a folder localised again with the given cloud options;
 /// one line per request and the count of accepted and wrong answers.
 int replay(const Args& a) {
@@ -162,17 +97,13 @@ int replay(const Args& a) {
   if (!cloud.ok())
     return fmt::print(stderr, "localise_probe: {}\n", std::string(cloud.status().message())),
            mrvs::kExitUsageError;
-  std::vector<std::string> files;
-  for (const auto& e : std::filesystem::recursive_directory_iterator(a.replay)) {
-    if (e.path().filename().string().rfind("req_", 0) == 0) files.push_back(e.path().string());
-  }
-  std::sort(files.begin(), files.end());
+  const std::vector<std::string> files = mrvs::tools::request_dump_files(a.replay);
   int ok = 0, wrong = 0;
   std::vector<double> ms;
   for (const std::string& f : files) {
-    const auto d = read_dump(f);
-    if (!d) {
-      fmt::print(stderr, "localise_probe: {} is no request dump (see --dump)\n", f);
+    const auto d = mrvs::tools::read_request_dump(f);
+    if (!d.ok()) {
+      fmt::print(stderr, "localise_probe: {} (see --dump)\n", std::string(d.status().message()));
       return mrvs::kExitDataError;
     }
     const auto r = cloud->localiser->localise(d->request);
@@ -270,7 +201,11 @@ int run(const Args& a) {
       err_deg.push_back(e.deg);
       wrong += e.m > 0.1 || e.deg > 2.0;
     }
-    if (!a.dump.empty()) dump_request(a.dump, x, T_m_o_true);
+    if (!a.dump.empty()) {
+      if (const auto st = mrvs::tools::write_request_dump(a.dump, x.request, x.result.T_m_o, T_m_o_true);
+          !st.ok())
+        return fmt::print(stderr, "localise_probe: {}\n", std::string(st.message())), mrvs::kExitDataError;
+    }
     if (a.per_request) {
       const auto at_truth = cloud->localiser->evaluate(x.request, T_m_o_true);
       fmt::print(

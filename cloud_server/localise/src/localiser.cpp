@@ -517,25 +517,44 @@ localisation::Result Localiser::localise(const Request& request) const {
   return r;
 }
 
-localisation::Result Localiser::evaluate(const Request& q, const SE3d& T_m_o) const {
-  const Impl& m = *impl_;
+namespace {
+
+/// The fine stage alone from T_m_o (iterations 0: the fit at T_m_o as it is).
+Result fine_from(const Localiser::Impl& m, const Request& q, const SE3d& T_m_o, int iterations) {
   const Prepared p = prepare(q, m.options);
   // T_m_o = [R_z(yaw) R_g | anchor_m - R anchor_o]: the yaw and the anchor's map-local position.
   const Eigen::Matrix3d R = T_m_o.rotation_matrix() * p.R_g.transpose();
   const double yaw = std::atan2(R(1, 0) - R(0, 1), R(0, 0) + R(1, 1));
   const Eigen::Vector3d anchor = T_m_o * q.anchor_o - m.map->origin;
   FineOptions fo = fine_options(m.options);
-  fo.iterations = 0;
-  Result r;
+  fo.iterations = iterations;
   const FineResult f = refine_pose(m.surface, p.fine, yaw, anchor, fo);
+  Result r;
   r.status = LStatus::kOk;
-  r.T_m_o = T_m_o;
+  const Eigen::Matrix3d R_f = Eigen::AngleAxisd(f.yaw, Eigen::Vector3d::UnitZ()) * p.R_g;
+  r.T_m_o =
+      iterations == 0 ? T_m_o : SE3d(Quatd(R_f).normalized(), f.anchor + m.map->origin - R_f * q.anchor_o);
   r.fitness = f.fitness;
   r.rmse_m = f.rmse_m;
   if (m.map_grid) {
-    r.blocked = blocked_share(*m.map_grid, p.sight, yaw, anchor, m.options.sight_start_m,
+    r.blocked = blocked_share(*m.map_grid, p.sight, f.yaw, f.anchor, m.options.sight_start_m,
                               m.options.sight_margin_m, m.options.sight_margin_fraction);
   }
+  return r;
+}
+
+}  // namespace
+
+localisation::Result Localiser::evaluate(const Request& q, const SE3d& T_m_o) const {
+  return fine_from(*impl_, q, T_m_o, 0);
+}
+
+localisation::Result Localiser::refine(const Request& q, const SE3d& T_m_o_start) const {
+  if (std::string bad = check_request(q, impl_->options); !bad.empty())
+    return failure(LStatus::kBadRequest, bad);
+  const auto t0 = Clock::now();
+  Result r = fine_from(*impl_, q, T_m_o_start, impl_->options.fine_iterations);
+  r.time_ms = ms_since(t0);
   return r;
 }
 

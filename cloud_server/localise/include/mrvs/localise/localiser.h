@@ -121,6 +121,11 @@ class Localiser {
   /// e.g. at the true pose): fitness, rmse and the share of blocked lines of sight
   /// (ambiguity: 0, status kOk).
   localisation::Result evaluate(const localisation::Request& request, const SE3d& T_m_o) const;
+  /// The fine stage alone (4-DoF point-to-plane, fine_iterations) started at T_m_o_start, no
+  /// search and no verdict (comparisons of registration methods from one start): the refined
+  /// T_m_o, its fitness, rmse and blocked share, the time; status kOk (kBadRequest for a
+  /// malformed request).
+  localisation::Result refine(const localisation::Request& request, const SE3d& T_m_o_start) const;
 
   const LocaliserOptions& options() const;
   /// Seconds spent in create() (normals, tree).
