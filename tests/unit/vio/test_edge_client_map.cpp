@@ -232,7 +232,7 @@ TEST(EdgeClientMap, WithoutGroundTruthTheCloudPlacesTheClientInItsMap) {
       MRVS_EDGE_CLIENT,
       "--dataset " + quoted(sequence) + " --config " + quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") +
           " --output " + quoted(dir / "traj.txt") + " --threads 1 --dds-profile " + quoted(profile()) +
-          " --dds-domain " + std::to_string(kDomain) + " --map-wait 20 --log-level info --progress 0");
+          " --dds-domain " + std::to_string(kDomain) + " --map-wait 20 --realtime --log-level info --progress 0");
   server->stop();
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(run.output.find("ground truth read"), std::string::npos) << run.output;
