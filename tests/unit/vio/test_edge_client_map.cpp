@@ -229,10 +229,11 @@ TEST(EdgeClientMap, WithoutGroundTruthTheCloudPlacesTheClientInItsMap) {
   const fs::path sequence = clip_without_groundtruth(dir.path());
   auto server = start_server(dir / "server.log");
   const auto run = mrvs::test::run_tool(
-      MRVS_EDGE_CLIENT,
-      "--dataset " + quoted(sequence) + " --config " + quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") +
-          " --output " + quoted(dir / "traj.txt") + " --threads 1 --dds-profile " + quoted(profile()) +
-          " --dds-domain " + std::to_string(kDomain) + " --map-wait 20 --realtime --log-level info --progress 0");
+      MRVS_EDGE_CLIENT, "--dataset " + quoted(sequence) + " --config " +
+                            quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") + " --output " +
+                            quoted(dir / "traj.txt") + " --threads 1 --dds-profile " + quoted(profile()) +
+                            " --dds-domain " + std::to_string(kDomain) +
+                            " --map-wait 20 --realtime --log-level info --progress 0");
   server->stop();
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(run.output.find("ground truth read"), std::string::npos) << run.output;
