@@ -113,9 +113,18 @@ int replay(const Args& a) {
     ok += is_ok;
     wrong += is_ok && (e.m > 0.1 || e.deg > 2.0);
     ms.push_back(r.time_ms);
+    // Where the error lies (map axes), how well the truth itself fits, and where the fine stage
+    // goes from the truth: a wrong answer that fits better than the truth is the data's, one the
+    // fine stage leaves the truth for is the fine stage's, one it does not reach is the search's.
+    const Eigen::Vector3d d_m = (r.T_m_o * at).translation() - (d->truth * at).translation();
+    const auto at_truth = cloud->localiser->evaluate(d->request, d->truth);
+    const auto from_truth = cloud->localiser->refine(d->request, d->truth);
+    const Error ft = pose_error(from_truth.T_m_o * at, d->truth * at);
     fmt::print(
-        "REPLAY {} status '{}' ambiguity {:.2f} fitness {:.2f} error {:.3f} m {:.2f} deg {:.0f} ms ({})\n", f,
-        mrvs::localisation::status_name(r.status), r.ambiguity, r.fitness, e.m, e.deg, r.time_ms, r.detail);
+        "REPLAY {} status '{}' ambiguity {:.2f} fitness {:.2f} error {:.3f} m {:.2f} deg {:.0f} ms ({}) "
+        "error_xyz {:.3f} {:.3f} {:.3f} truth_fitness {:.2f} from_truth {:.3f} m fitness {:.2f}\n",
+        f, mrvs::localisation::status_name(r.status), r.ambiguity, r.fitness, e.m, e.deg, r.time_ms, r.detail,
+        d_m.x(), d_m.y(), d_m.z(), at_truth.fitness, ft.m, from_truth.fitness);
   }
   fmt::print(
       "REPLAYED: {}\nANSWERS_OK: {}\nANSWERS_OK_WRONG: {}\nCLOUD_MS_MEDIAN: {:.1f}\nCLOUD_MS_P95: {:.1f}\n",

@@ -209,6 +209,7 @@ constexpr double kSameRad = 2.0 * kDegToRad;
 FineOptions fine_options(const LocaliserOptions& o) {
   FineOptions fo;
   fo.iterations = o.fine_iterations;
+  fo.ramp_iterations = o.fine_ramp_iterations;
   fo.start_distance_m = o.fine_start_distance_m;
   fo.end_distance_m = o.fine_end_distance_m;
   fo.huber_m = o.huber_m;

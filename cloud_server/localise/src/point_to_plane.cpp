@@ -70,7 +70,10 @@ FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vecto
   out.anchor = anchor;
   const int n = std::max(0, o.iterations);  // 0: only evaluate the start
   for (int it = 0; it < n; ++it) {
-    const double s = n > 1 ? std::min(1.0, static_cast<double>(it) / (0.5 * (n - 1))) : 1.0;
+    // A start off by more than the end distance along a weakly held direction (the height, held
+    // by the few points on floors and tables) walks there in steps of a few cm: the iterations
+    // at the end distance go on until the steps stop, not for a fixed count.
+    const double s = o.ramp_iterations > 0 ? std::min(1.0, static_cast<double>(it) / o.ramp_iterations) : 1.0;
     const double dist = o.start_distance_m + s * (o.end_distance_m - o.start_distance_m);
     const Linearised L = linearise(surface, points, out.yaw, out.anchor, dist, o);
     if (L.used < 4) break;
@@ -88,7 +91,7 @@ FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vecto
     out.anchor += dx.head<3>();
     out.yaw += dx(3);
     out.iterations = it + 1;
-    if (s >= 1.0 && dx.head<3>().norm() < 1e-5 && std::abs(dx(3)) < 1e-6) break;
+    if (s >= 1.0 && dx.head<3>().norm() < o.converged_m && std::abs(dx(3)) < o.converged_rad) break;
   }
   const Linearised L = linearise(surface, points, out.yaw, out.anchor, o.end_distance_m, o, &out.evidence);
   out.information = L.information;

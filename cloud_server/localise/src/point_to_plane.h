@@ -17,9 +17,12 @@
 namespace mrvs::localise {
 
 struct FineOptions {
-  int iterations = 20;
-  double start_distance_m = 0.3;  ///< correspondence distance of the first iteration
-  double end_distance_m = 0.1;    ///< ... shrinking linearly to this by the last ones
+  int iterations = 20;            ///< at most; fewer once a step moves less than the tolerances
+  int ramp_iterations = 10;       ///< the correspondence distance shrinks over these ...
+  double start_distance_m = 0.3;  ///< ... from this (the first iteration's) ...
+  double end_distance_m = 0.1;    ///< ... to this, kept until the end
+  double converged_m = 1e-4;      ///< after the ramp, a step shorter than this ...
+  double converged_rad = 1e-5;    ///< ... and turning less than this ends the iterations
   double huber_m = 0.03;          ///< residuals beyond are down-weighted
   double inlier_m = 0.05;         ///< a point this close to the map's surface is on it
   double voxel_m = 0.03;          ///< the map level's voxel: its points are this sparse on a surface

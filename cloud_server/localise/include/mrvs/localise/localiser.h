@@ -40,9 +40,10 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
   double fine_resolution_m = 0.03;  ///< the map level the fine stage registers to, m
   double fine_voxel_m = 0.05;       ///< the submap is thinned to one point per this cell, m
   int fine_max_points = 2000;
-  int fine_iterations = 20;
-  double fine_start_distance_m = 0.3;   ///< correspondence distance, first iteration, m
-  double fine_end_distance_m = 0.1;     ///< ... last iterations, m
+  int fine_iterations = 40;             ///< at most (fewer once converged)
+  int fine_ramp_iterations = 10;        ///< the correspondence distance shrinks over these ...
+  double fine_start_distance_m = 0.3;   ///< ... from this, m ...
+  double fine_end_distance_m = 0.1;     ///< ... to this, kept until converged, m
   double huber_m = 0.03;                ///< point-to-plane residuals beyond are down-weighted, m
   int normal_knn = 12;                  ///< map points in a normal's fit
   double normal_max_rms_m = 0.01;       ///< rougher neighbourhoods have no normal, m
@@ -82,7 +83,9 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
     v("fine_resolution_m", fine_resolution_m, in_range(0.001, 10.0), "map level of the fine stage, m");
     v("fine_voxel_m", fine_voxel_m, in_range(0.001, 10.0), "submap thinning cell of the fine stage, m");
     v("fine_max_points", fine_max_points, in_range(10, 1000000), "submap points of the fine stage");
-    v("fine_iterations", fine_iterations, in_range(1, 1000), "fine stage iterations");
+    v("fine_iterations", fine_iterations, in_range(1, 1000), "most fine stage iterations");
+    v("fine_ramp_iterations", fine_ramp_iterations, in_range(0, 1000),
+      "iterations over which the correspondence distance shrinks");
     v("fine_start_distance_m", fine_start_distance_m, in_range(0.001, 100.0),
       "first correspondence distance, m");
     v("fine_end_distance_m", fine_end_distance_m, in_range(0.001, 100.0), "last correspondence distance, m");
