@@ -11,9 +11,13 @@
 #
 # Usage: scripts/localisation_experiment.sh [--out DIR] [--seed N] [--per-trajectory K]
 #                                           [--duration S] [--offset F] [--data DIR]
+#                                           [--report-only]
 #   defaults: build/localisation_experiment, seed 2, 10 clips per trajectory, 12 s each,
 #   starts at 3 + (i + F) * (length - 18) / K s for i = 0..K-1 with F = 0.5 (seed 1 with
-#   F = 0 is the set the thresholds were tuned on: see edge_client/README.md).
+#   F = 0 is the set the thresholds were tuned on: see cloud_server/localise/README.md).
+#   --report-only remakes OUT/REPORT.md from OUT/runs without running anything.
+#   The git revision (+dirty with local changes) and the arguments go to OUT/experiment.txt,
+#   which the report reads.
 # Environment: MRVS_SHARED_DIR (default tests/, which holds data/euroc_groundtruth/).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
@@ -25,6 +29,7 @@ per=10
 duration=12
 offset=0.5
 data=""
+report_only=0
 while [[ $# -gt 0 ]]; do
   case $1 in
     --out) out=${2:?}; shift 2 ;;
@@ -33,17 +38,23 @@ while [[ $# -gt 0 ]]; do
     --duration) duration=${2:?}; shift 2 ;;
     --offset) offset=${2:?}; shift 2 ;;
     --data) data=${2:?}; shift 2 ;;
-    -h|--help) sed -n '2,18p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    --report-only) report_only=1; shift ;;
+    -h|--help) sed -n '2,21p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "localisation_experiment.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
 shared=${MRVS_SHARED_DIR:-$MRVS_ROOT/tests}
 [[ -d $shared/data/euroc_groundtruth ]] || { echo "localisation_experiment.sh: missing $shared/data/euroc_groundtruth" >&2; exit 1; }
-mrvs_build --target demo_tools
 bin=$MRVS_BUILD/bin
 data=${data:-$out/data}
 mkdir -p "$out/runs" "$data"
 started=$SECONDS
+if [[ $report_only -eq 0 ]]; then
+mrvs_build --target demo_tools
+rev=$(git -C "$MRVS_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+git -C "$MRVS_ROOT" diff --quiet HEAD 2>/dev/null || rev="$rev+dirty"
+printf 'revision: %s\nseed: %s\nper_trajectory: %s\nduration: %s\noffset: %s\n' \
+    "$rev" "$seed" "$per" "$duration" "$offset" >"$out/experiment.txt"
 export MRVS_SERVER_LOG_LEVEL=info  # its per-request lines give the registration times
 
 in_netns() {
@@ -80,6 +91,7 @@ for trajectory in "$shared"/data/euroc_groundtruth/*.txt; do
     grep -h 'localisation: client' "$run/server.log" | sed -E 's/.* in ([0-9]+) ms.*/\1/' >"$run/cloud_ms.txt" || true
   done
 done
+fi
 
 step "report"
 "$(command -v /usr/bin/python3 || command -v python3)" - "$out" "$seed" "$per" "$duration" "$offset" <<'PY'
@@ -93,6 +105,10 @@ def keys(path):
                 k, v = line.split(": ", 1)
                 kv[k.strip()] = v.strip()
     return kv
+ex = keys(os.path.join(out, "experiment.txt"))
+rev = ex.get("revision", "unknown")
+seed, per, duration, offset = (ex.get(k, v) for k, v in
+                               (("seed", seed), ("per_trajectory", per), ("duration", duration), ("offset", offset)))
 rows, within, wrong, errs, degs, times, cloud, up, down, n = [], 0, 0, [], [], [], [], [], [], 0
 for run in sorted(glob.glob(os.path.join(out, "runs", "*"))):
     n += 1
@@ -113,7 +129,7 @@ for run in sorted(glob.glob(os.path.join(out, "runs", "*"))):
 q = lambda v, p: sorted(v)[min(len(v) - 1, int(p * len(v)))] if v else float("nan")
 with open(os.path.join(out, "REPORT.md"), "w") as f:
     f.write(f"# Map-based localisation from {n} start instants\n\n")
-    f.write(f"Seed {seed}, {per} clips per shared trajectory of {duration} s (start offset {offset}), realistic preset, "
+    f.write(f"Revision {rev}. Seed {seed}, {per} clips per shared trajectory of {duration} s (start offset {offset}), realistic preset, "
             "shipped configs (config/euroc.yaml, config/map_indoor.yaml), cloud_server + edge_client over Fast DDS on "
             "loopback in real time, no ground truth at run time. Command per clip in runs/*/command.txt; produced by "
             "scripts/localisation_experiment.sh.\n\n")
