@@ -122,9 +122,13 @@ int replay(const Args& a) {
     const Error ft = pose_error(from_truth.T_m_o * at, d->truth * at);
     fmt::print(
         "REPLAY {} status '{}' ambiguity {:.2f} fitness {:.2f} error {:.3f} m {:.2f} deg {:.0f} ms ({}) "
-        "error_xyz {:.3f} {:.3f} {:.3f} truth_fitness {:.2f} from_truth {:.3f} m fitness {:.2f}\n",
+        "error_xyz {:.3f} {:.3f} {:.3f} truth_fitness {:.2f} from_truth {:.3f} m fitness {:.2f} "
+        "hypotheses {} T_m_o {:.4f} {:.4f} {:.4f} yaw {:.5f} anchor_o {:.4f} {:.4f} {:.4f}\n",
         f, mrvs::localisation::status_name(r.status), r.ambiguity, r.fitness, e.m, e.deg, r.time_ms, r.detail,
-        d_m.x(), d_m.y(), d_m.z(), at_truth.fitness, ft.m, from_truth.fitness);
+        d_m.x(), d_m.y(), d_m.z(), at_truth.fitness, ft.m, from_truth.fitness, r.hypotheses,
+        r.T_m_o.translation().x(), r.T_m_o.translation().y(), r.T_m_o.translation().z(),
+        mrvs::edge::yaw_of(r.T_m_o), d->request.anchor_o.x(), d->request.anchor_o.y(),
+        d->request.anchor_o.z());
   }
   fmt::print(
       "REPLAYED: {}\nANSWERS_OK: {}\nANSWERS_OK_WRONG: {}\nCLOUD_MS_MEDIAN: {:.1f}\nCLOUD_MS_P95: {:.1f}\n",

@@ -68,6 +68,7 @@ void MapLocaliser::reset() {
   tracks_.clear();
   pending_.reset();
   candidates_.clear();
+  guesses_.clear();
   first_ns_.reset();
   next_request_ns_ = 0;
   last_dense_ns_ = 0;
@@ -212,7 +213,15 @@ std::optional<Alignment> MapLocaliser::handle(const LocalisationReply& reply, Lo
   stats->rtt_ms = 1e-6 * static_cast<double>(reply.rtt_ns);
   stats->cloud_ms = r.time_ms;
   stats->reply = fmt::format("{}: {}", localisation::status_name(r.status), r.detail);
+  Alignment a{r.T_m_o, r.covariance, r.T_m_o * p.anchor_o, p.t_ns, p.from_ns, r.fitness, r.ambiguity};
   if (r.status != Status::kOk) {
+    // A best guess: the cloud refined distinct poses and could not tell the best from a rival
+    // (not a search that gave up, hypotheses 0).
+    if (options_.guesses_confirm && r.status == Status::kAmbiguous && r.hypotheses > 0) {
+      if (auto ok = take_guess(a)) {
+        return accept(*ok, fmt::format("an ok answer confirmed by answer {}'s best guess", p.seq), stats);
+      }
+    }
     refuse(fmt::format("the cloud answered request {} '{}' ({})", p.seq, localisation::status_name(r.status),
                        r.detail));
     return std::nullopt;
@@ -222,7 +231,6 @@ std::optional<Alignment> MapLocaliser::handle(const LocalisationReply& reply, Lo
         fmt::format("answer {} is ambiguous ({:.2f} > {:.2f})", p.seq, r.ambiguity, options_.max_ambiguity));
     return std::nullopt;
   }
-  Alignment a{r.T_m_o, r.covariance, r.T_m_o * p.anchor_o, p.t_ns, p.from_ns, r.fitness, r.ambiguity};
   if (!candidates_.empty() && !agree(candidates_.back(), a)) {
     // One of the two is wrong: start over from this one (the next answer, from new data, decides).
     candidates_.assign(1, a);
@@ -238,15 +246,41 @@ std::optional<Alignment> MapLocaliser::handle(const LocalisationReply& reply, Lo
   candidates_.push_back(a);
   // The confirming answer should come from fresh data: back to the short submap.
   window_s_ = options_.window_s;
-  if (static_cast<int>(candidates_.size()) < options_.answers_needed) {
+  const bool guessed = options_.guesses_confirm && confirming_guess(a) != nullptr;
+  if (static_cast<int>(candidates_.size()) + (guessed ? 1 : 0) < options_.answers_needed) {
     status_ = fmt::format("answer {} ok (fitness {:.2f}, ambiguity {:.2f}); waiting for {} agreeing answers",
                           p.seq, r.fitness, r.ambiguity, options_.answers_needed);
     spdlog::info("localisation: {}", status_);
     return std::nullopt;
   }
+  return accept(a,
+                fmt::format("answer {} ({} agreeing{})", p.seq, candidates_.size(),
+                            guessed ? ", and an earlier best guess" : ""),
+                stats);
+}
+
+std::optional<Alignment> MapLocaliser::take_guess(const Alignment& guess) {
+  constexpr std::size_t kKeptGuesses = 16;
+  if (!candidates_.empty() && static_cast<int>(candidates_.size()) + 1 >= options_.answers_needed &&
+      independent(candidates_.back(), guess) && agree(candidates_.back(), guess)) {
+    return candidates_.back();
+  }
+  guesses_.push_back(guess);
+  if (guesses_.size() > kKeptGuesses) guesses_.pop_front();
+  return std::nullopt;
+}
+
+const Alignment* MapLocaliser::confirming_guess(const Alignment& a) const {
+  for (auto it = guesses_.rbegin(); it != guesses_.rend(); ++it) {
+    if (independent(*it, a) && agree(*it, a)) return &*it;
+  }
+  return nullptr;
+}
+
+std::optional<Alignment> MapLocaliser::accept(const Alignment& a, const std::string& how,
+                                              LocalisationFrameStats* stats) {
   stats->accepted = true;
-  status_ = fmt::format("localised by answer {} ({} agreeing; fitness {:.2f}, ambiguity {:.2f})", p.seq,
-                        candidates_.size(), r.fitness, r.ambiguity);
+  status_ = fmt::format("localised by {}; fitness {:.2f}, ambiguity {:.2f}", how, a.fitness, a.ambiguity);
   return a;
 }
 

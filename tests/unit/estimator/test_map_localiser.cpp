@@ -137,6 +137,87 @@ TEST(MapLocaliser, RefusalsAndAmbiguityAskAgainWithMoreData) {
   EXPECT_NE(loc.status().find("asking again"), std::string::npos) << loc.status();
 }
 
+/// An ambiguous answer with a best guess (the cloud refined distinct poses, hypotheses > 0).
+localisation::Result guess_result(const SE3d& T_m_o, int hypotheses = 6) {
+  localisation::Result r = ok_result(T_m_o, 0.9);
+  r.status = localisation::Status::kAmbiguous;
+  r.hypotheses = hypotheses;
+  r.detail = "another pose 4 m / 90 deg away is told apart too weakly";
+  return r;
+}
+
+LocalisationOptions guessing() {
+  LocalisationOptions o = options();
+  o.guesses_confirm = true;
+  return o;
+}
+
+TEST(MapLocaliser, ABestGuessConfirmsAnOkAnswerFromNewDataBeforeOrAfterIt) {
+  const SE3d T(Quatd(Eigen::AngleAxisd(0.3, Vec3d::UnitZ())), Vec3d(1.0, 2.0, 0.0));
+  {
+    ScriptedCloud cloud;
+    cloud.script = {ok_result(T), guess_result(T)};
+    MapLocaliser loc(guessing());
+    const auto a = run(loc, cloud, 0, 3.0);
+    ASSERT_TRUE(a.has_value()) << loc.status();
+    EXPECT_EQ(cloud.sent.size(), 2u);
+    EXPECT_EQ(a->ambiguity, 0.3);  // the ok answer is the one used
+    EXPECT_LT((a->T_m_o.translation() - T.translation()).norm(), 1e-12);
+    EXPECT_NE(loc.status().find("best guess"), std::string::npos) << loc.status();
+  }
+  {
+    ScriptedCloud cloud;
+    cloud.script = {guess_result(T), ok_result(T)};
+    MapLocaliser loc(guessing());
+    const auto a = run(loc, cloud, 0, 3.0);
+    ASSERT_TRUE(a.has_value()) << loc.status();
+    EXPECT_EQ(cloud.sent.size(), 2u);
+    EXPECT_EQ(a->ambiguity, 0.3);
+  }
+  {
+    // Off (the option's default), the same answers are not enough.
+    ScriptedCloud cloud;
+    cloud.script = {ok_result(T), guess_result(T)};
+    MapLocaliser loc(options());
+    EXPECT_FALSE(run(loc, cloud, 0, 3.0).has_value()) << loc.status();
+  }
+}
+
+TEST(MapLocaliser, BestGuessesNeverLocaliseAloneNorConfirmAWrongPoseOrAStoppedSearch) {
+  const SE3d T(Quatd::Identity(), Vec3d(1.0, 2.0, 0.0));
+  const SE3d turned(Quatd(Eigen::AngleAxisd(0.5 * kPi, Vec3d::UnitZ())), Vec3d(5.0, 2.0, 0.0));
+  {
+    ScriptedCloud cloud;  // guesses agreeing with each other: still no ok answer
+    cloud.script = {guess_result(T), guess_result(T), guess_result(T), guess_result(T)};
+    MapLocaliser loc(guessing());
+    EXPECT_FALSE(run(loc, cloud, 0, 5.0).has_value()) << loc.status();
+    EXPECT_EQ(cloud.sent.size(), 4u);
+  }
+  {
+    ScriptedCloud cloud;  // the guess puts another pose first
+    cloud.script = {ok_result(T), guess_result(turned), guess_result(turned)};
+    MapLocaliser loc(guessing());
+    EXPECT_FALSE(run(loc, cloud, 0, 4.0).has_value()) << loc.status();
+  }
+  {
+    ScriptedCloud cloud;  // a search stopped by max_search_nodes has no best guess (hypotheses 0)
+    cloud.script = {ok_result(T), guess_result(T, 0), guess_result(T, 0)};
+    MapLocaliser loc(guessing());
+    EXPECT_FALSE(run(loc, cloud, 0, 4.0).has_value()) << loc.status();
+  }
+  {
+    ScriptedCloud cloud;  // from the same data: the guess comes from a submap overlapping the ok one
+    LocalisationOptions o = guessing();
+    o.max_overlap = 0.0;
+    o.window_s = 2.5;
+    cloud.script = {ok_result(T), guess_result(T)};
+    MapLocaliser loc(o);
+    EXPECT_FALSE(run(loc, cloud, 0, 2.5).has_value()) << loc.status();
+    EXPECT_EQ(cloud.sent.size(), 2u);
+    EXPECT_TRUE(cloud.script.empty());  // both answered
+  }
+}
+
 TEST(MapLocaliser, WithoutTheServiceItWaitsAndSaysSo) {
   ScriptedCloud cloud;
   cloud.offers = false;

@@ -8,6 +8,10 @@
 //     max_overlap) must agree (their T_m_o, within their covariances plus a floor) before the
 //     newest is used: one wrong lock, or the same wrong lock twice from the same data, is not
 //     enough;
+//   - with guesses_confirm, an "ambiguous" answer's best pose (a real best guess: the cloud
+//     refined rivals and could not tell them apart) may stand in for one of those answers when
+//     it agrees with an "ok" one from independent data, before or after it: two submaps put the
+//     same pose first and one of them tells it from every rival;
 //   - a refused or disagreeing answer makes the next submap longer (up to max_window_s);
 //   - a request unanswered after timeout_s (wall clock) is given up and asked again.
 // Timing in the sensor clock (frame times) except the reply timeout (steady clock).
@@ -40,6 +44,7 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
   double quantum_m = 0.005;            ///< wire quantisation of the points, m
   double max_ambiguity = 0.8;          ///< answers more ambiguous are refused
   int answers_needed = 2;              ///< agreeing answers before one is used
+  bool guesses_confirm = false;        ///< an ambiguous answer's best pose may be one of them (not alone)
   double max_overlap = 0.5;            ///< share of a submap's time span another may share and count
   double agree_floor_m = 0.05;         ///< agreement: covariance plus this, m
   double agree_floor_deg = 0.5;        ///< ... and this, deg
@@ -65,6 +70,8 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
     v("quantum_m", quantum_m, in_range(0.0001, 1.0), "wire quantisation of the points, m");
     v("max_ambiguity", max_ambiguity, in_range(0.0, 1.0), "most ambiguous answer accepted");
     v("answers_needed", answers_needed, in_range(1, 10), "agreeing answers before one is used");
+    v("guesses_confirm", guesses_confirm, any(),
+      "an ambiguous answer's best pose may stand in for one agreeing answer (never alone)");
     v("max_overlap", max_overlap, in_range(0.0, 1.0), "time share two agreeing submaps may have in common");
     v("agree_floor_m", agree_floor_m, in_range(0.0, 100.0), "agreement floor, m");
     v("agree_floor_deg", agree_floor_deg, in_range(0.0, 180.0), "agreement floor, deg");
@@ -149,6 +156,11 @@ class MapLocaliser {
     Clock::time_point sent;
   };
   std::optional<Alignment> handle(const LocalisationReply& reply, LocalisationFrameStats* stats);
+  /// An ambiguous answer with a best guess: the ok candidate it confirms, if any (else kept).
+  std::optional<Alignment> take_guess(const Alignment& guess);
+  /// A guess from independent data that agrees with `a`, if any.
+  const Alignment* confirming_guess(const Alignment& a) const;
+  std::optional<Alignment> accept(const Alignment& a, const std::string& how, LocalisationFrameStats* stats);
   bool agree(const Alignment& earlier, const Alignment& later) const;
   /// Their submaps share at most max_overlap of the shorter one's time span.
   bool independent(const Alignment& a, const Alignment& b) const;
@@ -164,6 +176,7 @@ class MapLocaliser {
   std::map<FeatureId, std::pair<Seen, Vec3d>> tracks_;
   std::optional<Pending> pending_;
   std::vector<Alignment> candidates_;  ///< agreeing answers so far
+  std::deque<Alignment> guesses_;      ///< best poses of the latest ambiguous answers (guesses_confirm)
   std::optional<TimestampNs> first_ns_;
   TimestampNs next_request_ns_ = 0;
   TimestampNs last_dense_ns_ = 0;
