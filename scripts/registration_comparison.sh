@@ -7,11 +7,12 @@
 # measurement only), then localise_compare on every request of the trajectory: ours (the
 # Localiser), FPFH + sample consensus + GICP (PCL, global), and from one offset start per
 # request the fine stages (ours, PCL's GICP, NDT, point-to-plane ICP). One thread
-# (OMP_NUM_THREADS=1). Writes OUT/REPORT.md.
+# (OMP_NUM_THREADS=1). Writes OUT/REPORT.md. With --dumps-only it stops after the dumps (the
+# input of scripts/localise_replay.sh).
 #
 # Usage: scripts/registration_comparison.sh [--out DIR] [--seed N] [--per-trajectory K]
 #                                           [--duration S] [--offset F] [--data DIR]
-#                                           [--start-m M] [--start-deg D]
+#                                           [--start-m M] [--start-deg D] [--dumps-only]
 #   defaults: build/registration_comparison, seed 2, 4 clips per trajectory of 12 s, offset
 #   0.5 (the starts of localisation_experiment.sh with K clips), fine starts 0.2 m / 5 deg off.
 # Environment: MRVS_SHARED_DIR (default tests/, which holds data/euroc_groundtruth/).
@@ -26,6 +27,7 @@ offset=0.5
 data=""
 start_m=0.2
 start_deg=5
+dumps_only=false
 while [[ $# -gt 0 ]]; do
   case $1 in
     --out) out=${2:?}; shift 2 ;;
@@ -36,6 +38,7 @@ while [[ $# -gt 0 ]]; do
     --data) data=${2:?}; shift 2 ;;
     --start-m) start_m=${2:?}; shift 2 ;;
     --start-deg) start_deg=${2:?}; shift 2 ;;
+    --dumps-only) dumps_only=true; shift ;;
     -h|--help) sed -n '2,18p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "registration_comparison.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -67,6 +70,7 @@ for trajectory in "$shared"/data/euroc_groundtruth/*.txt; do
         --map-config "$cfg/map_indoor.yaml" --dump "$out/dumps/$name/start$start" >"$out/dumps/$name/probe_start$start.txt" 2>&1 \
       || { echo "localise_probe failed on $clip (log: $out/dumps/$name/probe_start$start.txt)" >&2; exit 1; }
   done
+  $dumps_only && continue
   step "$name: comparing ($((SECONDS - started)) s so far)"
   echo "localise_compare --replay $out/dumps/$name --map $map --map-config config/map_indoor.yaml --start-m $start_m --start-deg $start_deg" \
       >"$out/compare/${name}_command.txt"
@@ -74,6 +78,10 @@ for trajectory in "$shared"/data/euroc_groundtruth/*.txt; do
       --start-m "$start_m" --start-deg "$start_deg" >"$out/compare/$name.txt"
 done
 
+if $dumps_only; then
+  echo "registration_comparison: dumps in $out/dumps, maps in $data ($((SECONDS - started)) s)"
+  exit 0
+fi
 step "report"
 "$(command -v /usr/bin/python3 || command -v python3)" - "$out" "$seed" "$per" "$duration" "$offset" "$start_m" "$start_deg" "$(git -C "$MRVS_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)" <<'PY'
 import glob, os, re, statistics as st, sys

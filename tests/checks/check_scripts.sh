@@ -12,7 +12,7 @@ for f in "$root"/scripts/*.py "$root"/scripts/lib/*.py; do
   python3 -c 'import ast, sys; ast.parse(open(sys.argv[1]).read(), sys.argv[1])' "$f" || { echo "syntax error: $f"; fail=1; }
 done
 for s in demo.sh two_hosts.sh throttled_latency.sh run_experiments.sh containers.sh localisation_experiment.sh \
-         registration_comparison.sh; do
+         registration_comparison.sh localise_replay.sh; do
   "$root/scripts/$s" --help >/dev/null 2>&1 || { echo "$s --help did not exit 0"; fail=1; }
   "$root/scripts/$s" --no-such-flag >/dev/null 2>&1
   [[ $? -eq 2 ]] || { echo "$s --no-such-flag did not exit 2"; fail=1; }
