@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "mrvs/geometry/angles.h"
 
@@ -13,12 +14,16 @@ struct Candidate {
   Eigen::Vector3i cell = Eigen::Vector3i::Zero();  ///< lowest anchor cell of the window
   int level = 0;                                   ///< window of 2^level cells per axis
   int score = 0;                                   ///< sum of the level's values (upper bound)
+  bool exact = true;                               ///< false: a looser bound (scoring stopped early)
 };
 
-/// The points of one yaw step as cell offsets from the anchor's cell.
+/// The points of one yaw step as cell offsets from the anchor's cell, the same as offsets in
+/// the grid's arrays, and their bounding box.
 struct RotatedPoints {
   double yaw = 0.0;
   std::vector<Eigen::Vector3i> offsets;
+  std::vector<std::ptrdiff_t> linear;
+  Eigen::Vector3i lo = Eigen::Vector3i::Zero(), hi = Eigen::Vector3i::Zero();
 };
 
 class Search {
@@ -37,7 +42,7 @@ class Search {
       for (int z = window_.anchor_min.z(); z <= window_.anchor_max.z(); z += step) {
         for (int y = window_.anchor_min.y(); y <= window_.anchor_max.y(); y += step) {
           for (int x = window_.anchor_min.x(); x <= window_.anchor_max.x(); x += step) {
-            roots.push_back(scored({k, Eigen::Vector3i(x, y, z), top, 0}));
+            roots.push_back(scored({k, Eigen::Vector3i(x, y, z), top, 0}, threshold()));
           }
         }
       }
@@ -52,10 +57,35 @@ class Search {
  private:
   std::size_t num_points() const { return rotated_.empty() ? 0 : rotated_.front().offsets.size(); }
 
-  Candidate scored(Candidate c) {
+  /// The window's bound: the sum of the level's values at its points. A window that cannot
+  /// beat `limit` (the sum so far plus 255 for every point left is at most it) stops early with
+  /// that looser, still valid, bound: it is pruned either way.
+  Candidate scored(Candidate c, int limit) {
+    const RotatedPoints& rp = rotated_[static_cast<std::size_t>(c.yaw)];
+    const std::size_t n = rp.offsets.size();
+    constexpr std::size_t kBlock = 64;
     int sum = 0;
-    for (const Eigen::Vector3i& o : rotated_[static_cast<std::size_t>(c.yaw)].offsets) {
-      sum += grid_.value(c.level, c.cell + o);
+    if (grid_.covers(c.cell + rp.lo, c.cell + rp.hi)) {
+      // Every point's cell is stored: no bounds check per point.
+      const std::uint8_t* base =
+          grid_.data(c.level) + grid_.linear(c.cell + Eigen::Vector3i::Constant(grid_.pad()));
+      for (std::size_t i = 0; i < n; ++i) {
+        sum += base[rp.linear[i]];
+        if ((i + 1) % kBlock == 0 && sum + 255 * static_cast<int>(n - i - 1) <= limit) {
+          sum += 255 * static_cast<int>(n - i - 1);
+          c.exact = false;
+          break;
+        }
+      }
+    } else {
+      for (std::size_t i = 0; i < n; ++i) {
+        sum += grid_.value(c.level, c.cell + rp.offsets[i]);
+        if ((i + 1) % kBlock == 0 && sum + 255 * static_cast<int>(n - i - 1) <= limit) {
+          sum += 255 * static_cast<int>(n - i - 1);
+          c.exact = false;
+          break;
+        }
+      }
     }
     c.score = sum;
     ++nodes_;
@@ -81,7 +111,9 @@ class Search {
         return;
       }
       if (c.level == 0) {
-        leaf(c);
+        // A leaf's score is the pose's: a bound from a stopped scoring is made exact first.
+        const Candidate exact = c.exact ? c : scored({c.yaw, c.cell, 0, 0}, std::numeric_limits<int>::min());
+        if (exact.score > threshold()) leaf(exact);
         continue;
       }
       std::vector<Candidate> children;
@@ -89,7 +121,7 @@ class Search {
       for (int i = 0; i < 8; ++i) {
         const Eigen::Vector3i cell = c.cell + Eigen::Vector3i(i & 1, (i >> 1) & 1, (i >> 2) & 1) * half;
         if ((cell.array() > window_.anchor_max.array()).any()) continue;
-        children.push_back(scored({c.yaw, cell, c.level - 1, 0}));
+        children.push_back(scored({c.yaw, cell, c.level - 1, 0}, threshold()));
       }
       descend(children);
     }
@@ -157,6 +189,12 @@ std::vector<Hypothesis> correlative_search(const LikelihoodPyramid& grid,
     rp.offsets.reserve(points.size());
     for (const Eigen::Vector3d& p : points) {
       rp.offsets.push_back(((R * p) * inv + Eigen::Vector3d::Constant(0.5)).array().floor().cast<int>());
+      rp.linear.push_back(grid.linear(rp.offsets.back()));
+    }
+    rp.lo = rp.hi = rp.offsets.front();
+    for (const Eigen::Vector3i& o : rp.offsets) {
+      rp.lo = rp.lo.cwiseMin(o);
+      rp.hi = rp.hi.cwiseMax(o);
     }
   }
   Search search(grid, window, options, std::move(rotated));

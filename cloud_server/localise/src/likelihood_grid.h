@@ -34,6 +34,19 @@ class LikelihoodPyramid {
   /// Map-local position of the min corner of base cell c.
   Eigen::Vector3d corner(const Eigen::Vector3i& c) const { return origin_ + resolution_ * c.cast<double>(); }
 
+  /// Level h's values as one array over the padded grid: base cell c is at
+  /// linear(c + Vector3i::Constant(pad())); for hot loops that check the bounds once per window.
+  const std::uint8_t* data(int level) const { return levels_[static_cast<std::size_t>(level)].data(); }
+  std::ptrdiff_t linear(const Eigen::Vector3i& q) const {
+    return (static_cast<std::ptrdiff_t>(q.z()) * padded_.y() + q.y()) * padded_.x() + q.x();
+  }
+  /// Whether every base cell of the box [lo, hi] is stored (padded cells included).
+  bool covers(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) const {
+    const Eigen::Vector3i a = lo + Eigen::Vector3i::Constant(pad_), b = hi + Eigen::Vector3i::Constant(pad_);
+    return (a.array() >= 0).all() && (b.array() < padded_.array()).all();
+  }
+  int pad() const { return pad_; }
+
   int levels() const { return static_cast<int>(levels_.size()); }
   const Eigen::Vector3i& size() const { return size_; }
   double resolution() const { return resolution_; }

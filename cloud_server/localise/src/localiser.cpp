@@ -401,8 +401,9 @@ int pyramid_levels(const Eigen::AlignedBox3d& anchors, const LocaliserOptions& o
                     o.branch_levels);
 }
 
-/// The coarse stage's grid (also the free-space check's): the whole map's, made once, when
-/// the request has no prior region; else made for the region.
+/// The coarse stage's grid (also the free-space check's): the whole map's, made once, when it
+/// fits max_grid_cells (a prior region then only narrows the anchors searched); else made for
+/// the request's region.
 struct SearchGrid {
   Region region;
   std::optional<LikelihoodPyramid> built;
@@ -416,7 +417,7 @@ std::variant<SearchGrid, Result> search_grid(const Localiser::Impl& m, const Req
   if (auto* fail = std::get_if<Result>(&region)) return *fail;
   SearchGrid g;
   g.region = std::get<Region>(region);
-  if (q.prior || !m.map_grid) {
+  if (!m.map_grid) {
     g.built = LikelihoodPyramid::build(m.coarse_points, g.region.grid, o.coarse_resolution_m,
                                        pyramid_levels(g.region.anchors, o), 1.0);
   }

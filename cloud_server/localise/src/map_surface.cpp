@@ -62,8 +62,14 @@ std::optional<Neighbour> MapSurface::nearest(const Eigen::Vector3f& q, float max
   if (!index_) return std::nullopt;
   std::uint32_t i = 0;
   float d2 = 0.0f;
-  if (index_->tree.knnSearch(q.data(), 1, &i, &d2) != 1 || d2 > max_distance_m * max_distance_m)
-    return std::nullopt;
+  // The nearest point, searched only within max_distance_m: the bound on the result's
+  // distance prunes the tree's cells farther than that (a point far from the map costs a
+  // few cells instead of a walk to its distant nearest neighbour).
+  nanoflann::KNNResultSet<float, std::uint32_t> result(1);
+  result.init(&i, &d2);
+  d2 = max_distance_m * max_distance_m;
+  index_->tree.findNeighbors(result, q.data(), nanoflann::SearchParams());
+  if (result.size() != 1) return std::nullopt;
   return Neighbour{i, std::sqrt(d2)};
 }
 

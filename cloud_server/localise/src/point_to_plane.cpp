@@ -24,18 +24,37 @@ struct Linearised {
   int inliers = 0;
 };
 
+/// Where each point's nearest map point can be, from one iteration to the next: at the last
+/// placement it was `distance` away (infinite: none within the search radius); after a move of
+/// the pose by d_anchor and d_yaw, that map point lies at most distance + |d_anchor| +
+/// |d_yaw| |p_xy| from the point, so the nearest one does too, and the search stops there.
+/// Exact: the same neighbour is found as by an unbounded search.
+struct NeighbourBounds {
+  std::vector<float> distance;
+  double moved_m = INFINITY;     ///< |d_anchor| since the last placement
+  double turned_rad = INFINITY;  ///< |d_yaw| since then
+  float radius(std::size_t i, const Eigen::Vector3d& p, float max_radius) const {
+    if (i >= distance.size() || !std::isfinite(distance[i])) return max_radius;
+    const double r = distance[i] + moved_m + turned_rad * p.head<2>().norm() + 1e-4;
+    return std::min(max_radius, static_cast<float>(r));
+  }
+};
+
 /// evidence: when given, filled with each point's structure weight (FineResult::evidence).
 Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points, double yaw,
                      const Eigen::Vector3d& anchor, double max_distance, const FineOptions& o,
-                     std::vector<float>* evidence = nullptr) {
+                     NeighbourBounds* bounds, std::vector<float>* evidence = nullptr) {
   Linearised L;
   const double reach = o.inlier_m + o.voxel_m;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   if (evidence) evidence->assign(points.size(), 0.0f);
+  const float max_radius = static_cast<float>(std::max(max_distance, reach));
+  std::vector<float> found(points.size(), INFINITY);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d& p = points[i];
     const Eigen::Vector3d x = R * p + anchor;
-    const auto nb = surface.nearest(x.cast<float>(), static_cast<float>(std::max(max_distance, reach)));
+    const auto nb = surface.nearest(x.cast<float>(), bounds->radius(i, p, max_radius));
+    if (nb) found[i] = nb->distance_m;
     if (!nb) continue;
     const Eigen::Vector3d n = surface.normal(nb->index).cast<double>();
     const bool planar = n.squaredNorm() > 0.5;
@@ -58,6 +77,8 @@ Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3
     if (evidence) (*evidence)[i] = static_cast<float>(n.head<2>().norm());
     ++L.with_normal;
   }
+  bounds->distance = std::move(found);
+  bounds->moved_m = bounds->turned_rad = 0.0;
   return L;
 }
 
@@ -69,13 +90,14 @@ FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vecto
   out.yaw = yaw;
   out.anchor = anchor;
   const int n = std::max(0, o.iterations);  // 0: only evaluate the start
+  NeighbourBounds bounds;
   for (int it = 0; it < n; ++it) {
     // A start off by more than the end distance along a weakly held direction (the height, held
     // by the few points on floors and tables) walks there in steps of a few cm: the iterations
     // at the end distance go on until the steps stop, not for a fixed count.
     const double s = o.ramp_iterations > 0 ? std::min(1.0, static_cast<double>(it) / o.ramp_iterations) : 1.0;
     const double dist = o.start_distance_m + s * (o.end_distance_m - o.start_distance_m);
-    const Linearised L = linearise(surface, points, out.yaw, out.anchor, dist, o);
+    const Linearised L = linearise(surface, points, out.yaw, out.anchor, dist, o, &bounds);
     if (L.used < 4) break;
     // No step along directions the submap does not constrain (a wall leaves two free): they
     // keep the start's value (solution remapping, Zhang et al., ICRA 2016).
@@ -90,10 +112,13 @@ FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vecto
     if (!dx.allFinite()) break;
     out.anchor += dx.head<3>();
     out.yaw += dx(3);
+    bounds.moved_m = dx.head<3>().norm();
+    bounds.turned_rad = std::abs(dx(3));
     out.iterations = it + 1;
     if (s >= 1.0 && dx.head<3>().norm() < o.converged_m && std::abs(dx(3)) < o.converged_rad) break;
   }
-  const Linearised L = linearise(surface, points, out.yaw, out.anchor, o.end_distance_m, o, &out.evidence);
+  const Linearised L =
+      linearise(surface, points, out.yaw, out.anchor, o.end_distance_m, o, &bounds, &out.evidence);
   out.information = L.information;
   out.inliers = L.inliers;
   out.fitness = points.empty() ? 0.0 : static_cast<double>(L.inliers) / static_cast<double>(points.size());

@@ -9,6 +9,21 @@
 namespace mrvs::localise {
 namespace {
 
+/// The score of one pose on the lattice (the anchor's cell holding `anchor`), by brute force.
+double exact_score(const LikelihoodPyramid& g, const std::vector<Eigen::Vector3d>& pts, double yaw,
+                   const Eigen::Vector3d& anchor) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3i cell = g.cell_of(anchor);
+  int s = 0;
+  for (const auto& p : pts) {
+    s += g.value(
+        0,
+        cell +
+            ((R * p) / g.resolution() + Eigen::Vector3d::Constant(0.5)).array().floor().cast<int>().matrix());
+  }
+  return s / (255.0 * pts.size());
+}
+
 double exhaustive_best(const LikelihoodPyramid& g, const std::vector<Eigen::Vector3d>& pts,
                        const SearchWindow& w) {
   const int yaws = static_cast<int>(std::ceil(2.0 * kPi / w.yaw_step_rad));
@@ -57,6 +72,9 @@ TEST(CorrelativeSearch, BestScoreEqualsTheExhaustiveSearch) {
     EXPECT_LE(hyps[i].score, hyps[i - 1].score);
     EXPECT_FALSE(same_pose(hyps[i], hyps[0], o));
   }
+  // Every hypothesis carries its pose's exact score, not a bound (windows whose scoring stops
+  // early, once they cannot win, are scored in full before they become hypotheses).
+  for (const Hypothesis& h : hyps) EXPECT_NEAR(h.score, exact_score(g, pts, h.yaw, h.anchor), 1e-12);
   const long long cells = (w.anchor_max - w.anchor_min + Eigen::Vector3i::Ones()).prod();
   EXPECT_LT(stats.nodes, cells * stats.yaws / 4) << "the bound prunes";
 }

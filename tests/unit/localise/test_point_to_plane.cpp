@@ -39,6 +39,35 @@ std::vector<Eigen::Vector3d> submap(const Eigen::Vector3d& view, double sigma, s
   return pts;
 }
 
+// The nearest map point within a radius, against brute force over the whole map: the search
+// bounded by the radius finds the same point, and none when the nearest lies beyond it.
+TEST(MapSurface, NearestWithinARadiusIsTheBruteForceNearest) {
+  const MapSurface& s = room().surface;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.5, 8.5);
+  int found = 0, none = 0;
+  for (int k = 0; k < 400; ++k) {
+    const Eigen::Vector3f q(static_cast<float>(u(rng)), static_cast<float>(0.8 * u(rng)),
+                            static_cast<float>(0.4 * u(rng)));
+    float best_d = INFINITY;
+    for (std::uint32_t i = 0; i < s.size(); ++i) best_d = std::min(best_d, (s.point(i) - q).norm());
+    for (const float radius : {0.02f, 0.1f, 0.3f, 10.0f}) {
+      const auto nb = s.nearest(q, radius);
+      if (best_d < radius * (1.0f - 1e-5f)) {
+        ASSERT_TRUE(nb.has_value()) << k << " " << radius;
+        EXPECT_NEAR(nb->distance_m, best_d, 1e-5f);
+        EXPECT_NEAR((s.point(nb->index) - q).norm(), best_d, 1e-5f);
+        ++found;
+      } else if (best_d > radius * (1.0f + 1e-5f)) {
+        EXPECT_FALSE(nb.has_value()) << k << " " << radius << " " << best_d;
+        ++none;
+      }
+    }
+  }
+  EXPECT_GT(found, 400);
+  EXPECT_GT(none, 400);
+}
+
 TEST(PointToPlane, ConvergesToTheTruePose) {
   EXPECT_GT(room().surface.planar_fraction(), 0.8);
   const Eigen::Vector3d view(3.0, 2.5, 1.3);
