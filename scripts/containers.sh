@@ -34,7 +34,7 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 if [[ $(id -u) -ne 0 ]]; then
-  echo "containers.sh: needs root (podman as root with runc; see ../shared/design/containers.md)." >&2
+  echo "containers.sh: needs root (podman as root with runc; see docker/README.md)." >&2
   echo "  Fix: sudo scripts/containers.sh" >&2
   exit 1
 fi

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 #include <opencv2/core/utility.hpp>
@@ -56,6 +57,7 @@ struct Args {
   int threads = 1;
   bool realtime = false;
   double progress_s = 5.0;
+  std::vector<double> imu_outage;  ///< start (s after the first image), duration (s)
   std::string log_level = "info";
 };
 
@@ -103,6 +105,12 @@ void add_options(CLI::App& app, Args& a) {
       "as many frames later as they would live)");
   app.add_option("--progress", a.progress_s, "Seconds between progress lines (0 = none)")
       ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--imu-outage", a.imu_outage,
+                 "Fault injection: drop the IMU samples from START s after the first image for DURATION s "
+                 "(the filter restarts and must find itself in the map again)")
+      ->expected(2)
+      ->type_name("START DURATION")
       ->check(CLI::NonNegativeNumber);
   mrvs::add_log_level_option(app, a.log_level);
 }
@@ -171,7 +179,10 @@ mrvs::StatusOr<Inputs> load_inputs(const Args& a, bool* usage) {
 
 /// Localisation figures over the run (alignment.source map).
 struct LocalisationReport {
-  int requests = 0, replies = 0, timeouts = 0, accepted = 0;
+  int requests = 0, replies = 0, timeouts = 0, accepted = 0, fixes_applied = 0, fixes_refused = 0,
+      doubted = 0;
+  std::vector<double> after_s;  ///< per filter run placed in the map: seconds from its initialisation
+  int placed_run = -1;          ///< the last filter run placed (a re-lock after a doubt is not a new run)
   std::vector<double> bytes_up, bytes_down, rtt_ms, cloud_ms, points;
   double first_after_s = -1.0;           ///< sensor time from initialisation to the first acceptance
   mrvs::TimestampNs first_t_imu_ns = 0;  ///< IMU time of the pose at that frame
@@ -188,7 +199,7 @@ struct Report {
   mrvs::io::Trajectory unmapped;    ///< poses of the current run not yet in the map frame
   int run = 0;
   mrvs::TimestampNs run_start_ns = 0;
-  int poses_never_mapped = 0;  ///< of runs that ended (restart) before the cloud placed them
+  int poses_never_mapped = 0;  ///< not placed by the cloud: written as the filter had them (keep_unplaced)
   LocalisationReport loc;
 };
 
@@ -234,22 +245,33 @@ void print_report(const Report& r, double wall_s) {
       "LOCALISATION_REQUESTS: {}\nLOCALISATION_REPLIES: {}\nLOCALISATION_TIMEOUTS: {}\nLOCALISED: {}\n",
       L.requests, L.replies, L.timeouts, L.accepted);
   fmt::print("LOCALISED_AFTER_S: {:.3f}\nLOCALISED_AT_T_NS: {}\n", L.first_after_s, L.first_t_imu_ns);
+  fmt::print("FILTER_RUNS: {}\nLOCALISED_RUNS: {}\nLOCALISED_AFTER_S_PER_RUN: {:.2f}\n", r.run,
+             L.after_s.size(), fmt::join(L.after_s, ","));
+  fmt::print("LOCALISATION_FIXES: {}\nLOCALISATION_FIXES_REFUSED: {}\nLOCKS_DOUBTED: {}\n", L.fixes_applied,
+             L.fixes_refused, L.doubted);
   fmt::print(
       "LOCALISATION_SUBMAP_POINTS: {:.0f}\nLOCALISATION_REQUEST_BYTES: {:.0f}\nLOCALISATION_REPLY_BYTES: "
       "{:.0f}\n",
       mean(L.points), mean(L.bytes_up), mean(L.bytes_down));
   print_ms("LOCALISATION_RTT", L.rtt_ms);
   print_ms("LOCALISATION_CLOUD", L.cloud_ms);
-  fmt::print("POSES_NEVER_IN_MAP_FRAME: {}\n", r.poses_never_mapped + static_cast<int>(r.unmapped.size()));
+  fmt::print("POSES_NEVER_IN_MAP_FRAME: {}\n", r.poses_never_mapped);
 }
 
-/// Feeds the IMU samples up to the first one at or after t_ns (IMU clock), and the GNSS
-/// fixes up to t_ns (the localisation's prior region, outdoors).
+/// IMU samples dropped by --imu-outage: [from_ns, to_ns) (IMU clock).
+struct Outage {
+  mrvs::TimestampNs from_ns = 0, to_ns = 0;
+  bool drops(mrvs::TimestampNs t_ns) const { return t_ns >= from_ns && t_ns < to_ns; }
+};
+
+/// Feeds the IMU samples up to the first one at or after t_ns (IMU clock), but those of the
+/// outage, and the GNSS fixes up to t_ns (the localisation's prior region, outdoors).
 mrvs::Status feed_sensors_until(mrvs::edge::VioSystem& vio, const mrvs::io::DatasetReader& reader,
-                                std::size_t* next_imu, std::size_t* next_gnss, mrvs::TimestampNs t_ns) {
+                                std::size_t* next_imu, std::size_t* next_gnss, mrvs::TimestampNs t_ns,
+                                const Outage& outage) {
   const auto& imu = reader.imu();
   while (*next_imu < imu.size()) {
-    MRVS_RETURN_IF_ERROR(vio.feed_imu(imu[*next_imu]));
+    if (!outage.drops(imu[*next_imu].t_ns)) MRVS_RETURN_IF_ERROR(vio.feed_imu(imu[*next_imu]));
     if (imu[(*next_imu)++].t_ns >= t_ns) break;
   }
   const auto& gnss = reader.gnss();
@@ -260,11 +282,21 @@ mrvs::Status feed_sensors_until(mrvs::edge::VioSystem& vio, const mrvs::io::Data
   return absl::OkStatus();
 }
 
+/// The poses held for the cloud that it never placed (the run ended by a restart, or by the end
+/// of the data, after a doubted lock or before a new one): once the map-frame trajectory has
+/// begun they join it as the filter had them, in a frame that continues from its last placed
+/// pose (a restart starts there, a doubted lock keeps its frame), rather than being lost.
+void keep_unplaced(Report* r) {
+  r->poses_never_mapped += static_cast<int>(r->unmapped.size());
+  if (!r->trajectory.empty())
+    r->trajectory.insert(r->trajectory.end(), r->unmapped.begin(), r->unmapped.end());
+  r->unmapped.clear();
+}
+
 /// A pose into the map-frame trajectory, or (odometry frame) held until the cloud places its run.
 void add_pose(const mrvs::edge::FrameOutput& e, Report* r) {
   if (e.run != r->run) {  // a new filter run (restart): a new odometry frame
-    r->poses_never_mapped += static_cast<int>(r->unmapped.size());
-    r->unmapped.clear();
+    keep_unplaced(r);
     r->run = e.run;
     r->run_start_ns = e.t_ns;
   }
@@ -287,6 +319,9 @@ void account_localisation(const mrvs::edge::FrameOutput& e, Report* r) {
   L.requests += l.requests;
   L.replies += l.replies;
   L.timeouts += l.timeouts;
+  L.fixes_applied += l.fixes_applied;
+  L.fixes_refused += l.fixes_refused;
+  L.doubted += l.doubted;
   if (l.requests > 0) {
     L.bytes_up.push_back(static_cast<double>(l.bytes_up));
     L.points.push_back(l.submap_points);
@@ -297,6 +332,8 @@ void account_localisation(const mrvs::edge::FrameOutput& e, Report* r) {
     L.cloud_ms.push_back(l.cloud_ms);
   }
   if (!e.T_m_o) return;
+  if (e.run != L.placed_run) L.after_s.push_back(mrvs::to_seconds(e.t_ns - r->run_start_ns));
+  L.placed_run = e.run;
   if (++L.accepted == 1) {
     L.first_after_s = mrvs::to_seconds(e.t_ns - r->run_start_ns);
     L.first_t_imu_ns = e.t_imu_ns;
@@ -380,16 +417,24 @@ bool process(const Args& a, const mrvs::io::DatasetReader& reader, mrvs::edge::V
   report->frame_interval_ms = quantile(intervals, 0.5);
   const mrvs::DurationNs td = reader.calibration().cameras[0].time_offset_ns;
   std::size_t next_imu = 0, next_gnss = 0;
+  Outage outage;
+  if (a.imu_outage.size() == 2 && n > 0) {
+    outage.from_ns = frames.front().t_ns + td + mrvs::from_seconds(a.imu_outage[0]);
+    outage.to_ns = outage.from_ns + mrvs::from_seconds(a.imu_outage[1]);
+    spdlog::info("IMU outage (--imu-outage): no IMU samples from {:.2f} s for {:.2f} s", a.imu_outage[0],
+                 a.imu_outage[1]);
+  }
   if (reader.has_gnss())
     spdlog::info("{} GNSS fixes: the prior region of the localisation requests", reader.gnss().size());
   const auto t0 = std::chrono::steady_clock::now();
   auto last_progress = t0;
+  int logged_run = 0;  // the last filter run whose initialisation was logged
   for (std::size_t k = 0; k < n; ++k) {
     const auto& f = frames[k];
     if (a.realtime) {
       std::this_thread::sleep_until(t0 + std::chrono::nanoseconds(f.t_ns - frames.front().t_ns));
     }
-    if (auto s = feed_sensors_until(vio, reader, &next_imu, &next_gnss, f.t_ns + td); !s.ok()) {
+    if (auto s = feed_sensors_until(vio, reader, &next_imu, &next_gnss, f.t_ns + td, outage); !s.ok()) {
       fmt::print(stderr, "edge_client: error: {}\n", std::string(s.message()));
       return false;
     }
@@ -407,8 +452,9 @@ bool process(const Args& a, const mrvs::io::DatasetReader& reader, mrvs::edge::V
       continue;
     }
     account(*out, static_cast<int>(k), use_map, report);
-    if (out->estimate.initialized && report->initialized_at == static_cast<int>(k)) {
+    if (out->estimate.initialized && out->estimate.run != logged_run) {  // each filter run's start
       spdlog::info("{}", vio.estimator().initialization_summary());
+      logged_run = out->estimate.run;
     }
     const auto now = std::chrono::steady_clock::now();
     if (a.progress_s > 0 && std::chrono::duration<double>(now - last_progress).count() >= a.progress_s) {
@@ -441,6 +487,13 @@ int run(const Args& a) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!process(a, *in->dataset, *vio, use_map, &report)) return mrvs::kExitDataError;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  keep_unplaced(&report);
+  if (report.poses_never_mapped > 0 && !report.trajectory.empty()) {
+    spdlog::warn(
+        "{} poses were never placed by the cloud (a restart or a doubted lock it did not answer in time): "
+        "written as the filter had them, continuing from its last placed pose",
+        report.poses_never_mapped);
+  }
   const bool mapped = !report.trajectory.empty();
   mrvs::io::Trajectory& out = mapped ? report.trajectory : report.odometry;
   std::stable_sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.t_ns < y.t_ns; });

@@ -42,6 +42,7 @@ struct Args {
   bool per_request = false;
   std::string dump;
   std::string replay;
+  std::string output;
   bool until_localised = false;
   int frames = 0;
   std::string log_level = "warn";
@@ -88,6 +89,52 @@ struct Error {
 Error pose_error(const SE3d& est, const SE3d& truth) {
   return {(est.translation() - truth.translation()).norm(),
           std::abs(mrvs::edge::yaw_of(est * truth.inverse())) * mrvs::kRadToDeg};
+}
+
+/// Pose fixes (requests sent once in the map frame): how far the filter was from the truth at
+/// the anchor, how far the answer would put it, and the answer's error in its own sigmas.
+struct FixStats {
+  std::vector<double> filter_m, filter_deg, answer_m, answer_deg, nees;
+  int ok = 0;
+};
+
+void add_fix(const mrvs::test::InProcessCloud::Exchange& x, const SE3d& est, const SE3d& truth, bool print,
+             FixStats* f) {
+  const mrvs::localisation::Result& r = x.result;
+  const Error before = pose_error(est, truth);
+  const Error after = pose_error(r.T_m_o * est, truth);
+  const bool is_ok = r.status == mrvs::localisation::Status::kOk;
+  double nees = -1.0;
+  if (is_ok) {
+    ++f->ok;
+    f->filter_m.push_back(before.m);
+    f->filter_deg.push_back(before.deg);
+    f->answer_m.push_back(after.m);
+    f->answer_deg.push_back(after.deg);
+    // The answer's error [position; yaw] at the anchor against its covariance there.
+    const mrvs::Vec3d anchor_m = r.T_m_o * x.request.anchor_o;
+    const Eigen::Matrix4d S = mrvs::edge::position_yaw_covariance(r.covariance, anchor_m, anchor_m);
+    Eigen::Vector4d e;
+    e.head<3>() = (r.T_m_o * est).translation() - truth.translation();
+    e(3) = mrvs::edge::yaw_of((r.T_m_o * est) * truth.inverse());
+    nees = e.dot(S.ldlt().solve(e));
+    f->nees.push_back(nees);
+  }
+  if (print) {
+    fmt::print(
+        "FIX {} status '{}' filter {:.3f} m {:.2f} deg answer {:.3f} m {:.2f} deg nees {:.1f} sd {:.3f} m "
+        "{:.2f} deg cloud {:.0f} ms\n",
+        x.request.seq, mrvs::localisation::status_name(r.status), before.m, before.deg, after.m, after.deg,
+        nees, std::sqrt(r.covariance(0, 0)), std::sqrt(r.covariance(5, 5)) * mrvs::kRadToDeg, r.time_ms);
+  }
+}
+
+void print_fixes(const FixStats& f) {
+  fmt::print("FIXES_OK: {}\nFIX_FILTER_ERROR_M_MEDIAN: {:.4f}\nFIX_FILTER_ERROR_DEG_MEDIAN: {:.3f}\n", f.ok,
+             mrvs::quantile(f.filter_m, 0.5), mrvs::quantile(f.filter_deg, 0.5));
+  fmt::print(
+      "FIX_ANSWER_ERROR_M_MEDIAN: {:.4f}\nFIX_ANSWER_ERROR_DEG_MEDIAN: {:.3f}\nFIX_NEES_MEDIAN: {:.2f}\n",
+      mrvs::quantile(f.answer_m, 0.5), mrvs::quantile(f.answer_deg, 0.5), mrvs::quantile(f.nees, 0.5));
 }
 
 /// --replay: every dumped request of a folder localised again with the given cloud options;
@@ -168,6 +215,8 @@ int run(const Args& a) {
   const auto& imu = (*data)->imu();
   const mrvs::DurationNs td = (*data)->calibration().cameras[0].time_offset_ns;
   std::map<TimestampNs, SE3d> odometry;  ///< estimator pose by camera time, odometry frame
+  std::map<TimestampNs, SE3d> mapped;    ///< ... once in the map frame
+  mrvs::io::Trajectory trajectory;       ///< IMU poses in the map frame (those before the lock moved by it)
   std::size_t next_imu = 0, next_gnss = 0;
   const auto& gnss = (*data)->gnss();
   TimestampNs init_ns = 0, lock_ns = 0;
@@ -190,7 +239,11 @@ int run(const Args& a) {
     if (!out.ok() || !out->estimate.T_w_b) continue;
     const auto& e = out->estimate;
     if (init_ns == 0) init_ns = f.t_ns;
-    if (!e.in_map_frame) odometry[f.t_ns] = *e.T_w_b;
+    (e.in_map_frame ? mapped : odometry)[f.t_ns] = *e.T_w_b;
+    if (e.T_m_o) {
+      for (const auto& [t, T] : odometry) trajectory.push_back({t + td, *e.T_m_o * T});
+    }
+    if (e.in_map_frame) trajectory.push_back({e.t_imu_ns, *e.T_w_b});
     if (e.T_m_o && !lock_error) {
       lock_ns = f.t_ns;
       auto truth = mrvs::edge::interpolate_trajectory(gt, e.t_imu_ns);
@@ -200,9 +253,14 @@ int run(const Args& a) {
   }
   int ok = 0, wrong = 0;
   std::vector<double> err_m, err_deg, cloud_ms;
+  FixStats fixes;
   for (const auto& x : cloud->service->exchanges()) {
     const auto it = odometry.find(x.request.stamp_ns);
     auto truth = mrvs::edge::interpolate_trajectory(gt, x.request.stamp_ns + td);
+    if (const auto m = mapped.find(x.request.stamp_ns); m != mapped.end() && truth.ok()) {
+      add_fix(x, m->second, T_m_w * *truth, a.per_request, &fixes);
+      continue;
+    }
     if (it == odometry.end() || !truth.ok()) continue;
     const SE3d T_m_o_true = T_m_w * *truth * it->second.inverse();
     const Error e = pose_error(x.result.T_m_o * it->second, T_m_o_true * it->second);
@@ -240,6 +298,11 @@ int run(const Args& a) {
              lock_error ? mrvs::to_seconds(lock_ns - init_ns) : -1.0);
   fmt::print("LOCK_ERROR_M: {:.4f}\nLOCK_ERROR_DEG: {:.3f}\n", lock_error ? lock_error->m : -1.0,
              lock_error ? lock_error->deg : -1.0);
+  print_fixes(fixes);
+  if (!a.output.empty()) {
+    if (const auto st = mrvs::io::write_tum_trajectory(a.output, trajectory); !st.ok())
+      return fmt::print(stderr, "localise_probe: {}\n", std::string(st.message())), mrvs::kExitDataError;
+  }
   return mrvs::kExitOk;
 }
 
@@ -267,6 +330,9 @@ int main(int argc, char** argv) {
   app.add_option("--dump", a.dump,
                  "Folder for one text file per request: true and answered T_map_odom, the points");
   app.add_flag("--until-localised", a.until_localised, "Stop at the first accepted answer");
+  app.add_option(
+      "--output", a.output,
+      "TUM trajectory of the IMU in the map frame (from the lock on; the poses before it moved by it)");
   mrvs::add_log_level_option(app, a.log_level);
   if (auto exit_code = mrvs::parse_command_line(app, argc, argv, a.log_level)) return *exit_code;
   if (a.dataset.empty() && a.replay.empty()) {

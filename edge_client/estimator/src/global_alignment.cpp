@@ -131,13 +131,32 @@ Eigen::MatrixXd imu_gauge_rows(const State& state) {
   return C;
 }
 
+Status check_covariance(const Mat6d& covariance, const char* what) {
+  if (!covariance.allFinite() || !covariance.isApprox(covariance.transpose(), 1e-9)) {
+    return absl::InvalidArgumentError(
+        fmt::format("{}: the alignment covariance is not finite and symmetric", what));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
-Status reanchor_state(State& state, const SE3d& T_m_o_in, const Mat6d& covariance, const Vec3d& anchor_m) {
-  if (!covariance.allFinite() || !covariance.isApprox(covariance.transpose(), 1e-9)) {
-    return absl::InvalidArgumentError("reanchor_state: the alignment covariance is not finite and symmetric");
+Eigen::Matrix4d position_yaw_covariance(const Mat6d& covariance, const Vec3d& anchor_m, const Vec3d& x_m) {
+  Eigen::Matrix4d S;
+  const int idx[4] = {0, 1, 2, 5};
+  for (int a = 0; a < 4; ++a) {
+    for (int b = 0; b < 4; ++b) S(a, b) = covariance(idx[a], idx[b]);
   }
-  const SE3d T = yaw_only(T_m_o_in);
+  Eigen::Matrix4d G = Eigen::Matrix4d::Identity();  // [rho; phi_z] about the anchor -> [p; yaw] at x_m
+  G.block<3, 1>(0, 3) = Vec3d::UnitZ().cross(x_m - anchor_m);
+  return G * S * G.transpose();
+}
+
+namespace {
+
+/// Moves the whole state (IMU, clones, points and their first estimates) by T (its rotation
+/// about +z); world-frame error blocks of the covariance turn with it.
+void move_state(State& state, const SE3d& T) {
   const Mat3d R = T.rotation_matrix();
   // Error-state Jacobian of the frame change: world-frame blocks rotate, body-frame ones stay.
   Eigen::MatrixXd F = Eigen::MatrixXd::Identity(state.dim(), state.dim());
@@ -157,21 +176,56 @@ Status reanchor_state(State& state, const SE3d& T_m_o_in, const Mat6d& covarianc
     p.p_w = T * p.p_w;
     p.fej = T * p.fej;
   }
+  state.P = F * state.P * F.transpose();
+}
+
+}  // namespace
+
+Status reanchor_state(State& state, const SE3d& T_m_o_in, const Mat6d& covariance, const Vec3d& anchor_m) {
+  MRVS_RETURN_IF_ERROR(check_covariance(covariance, "reanchor_state"));
+  move_state(state, yaw_only(T_m_o_in));
   // Drop the position and heading uncertainty (along the gauge directions), put the map's in.
   const Vec3d pivot = state.imu.p_w_b;
   const Eigen::MatrixXd N = gauge_directions(state, pivot);
   const Eigen::MatrixXd K = Eigen::MatrixXd::Identity(state.dim(), state.dim()) - N * imu_gauge_rows(state);
-  Eigen::Matrix4d G = Eigen::Matrix4d::Identity();  // [rho; phi_z] about the anchor -> IMU [p; yaw]
-  G.block<3, 1>(0, 3) = Vec3d::UnitZ().cross(pivot - anchor_m);
-  Eigen::Matrix4d S;
-  const int idx[4] = {0, 1, 2, 5};
-  for (int a = 0; a < 4; ++a) {
-    for (int b = 0; b < 4; ++b) S(a, b) = covariance(idx[a], idx[b]);
-  }
-  const Eigen::MatrixXd KF = K * F;
-  state.P = KF * state.P * KF.transpose() + N * (G * S * G.transpose()) * N.transpose();
+  state.P =
+      K * state.P * K.transpose() + N * position_yaw_covariance(covariance, anchor_m, pivot) * N.transpose();
   state.P = 0.5 * (state.P + state.P.transpose()).eval();
   return absl::OkStatus();
+}
+
+StatusOr<PoseFix> apply_pose_fix(State& state, const SE3d& T_fix_in, const Mat6d& covariance,
+                                 const Vec3d& anchor_m, const Eigen::Vector4d& floor_sigma,
+                                 double gate_chi2) {
+  MRVS_RETURN_IF_ERROR(check_covariance(covariance, "apply_pose_fix"));
+  const SE3d T = yaw_only(T_fix_in);
+  const Vec3d p = state.imu.p_w_b;
+  PoseFix fix;
+  fix.residual.head<3>() = T * p - p;
+  fix.residual(3) = yaw_of(T);
+  // The filter's own [position; heading] covariance at the IMU, each at least floor_sigma.
+  const Eigen::MatrixXd C = imu_gauge_rows(state);
+  Eigen::Matrix4d own = C * state.P * C.transpose();
+  own.diagonal() = own.diagonal().cwiseMax(floor_sigma.array().square().matrix());
+  const Eigen::LDLT<Eigen::Matrix4d> S(own + position_yaw_covariance(covariance, anchor_m, p));
+  if (S.info() != Eigen::Success || !S.isPositive() || (S.vectorD().array() <= 0.0).any()) {
+    return absl::InvalidArgumentError("apply_pose_fix: the position and heading covariance is singular");
+  }
+  fix.mahalanobis2 = fix.residual.dot(S.solve(fix.residual));
+  if (!(fix.mahalanobis2 <= gate_chi2)) return fix;
+  // The Kalman gain from the floored covariance (the floor added along the gauge directions
+  // through the IMU, so C P' C^T = own): the mean moves by P' C^T S^-1 r, the IMU's
+  // [position; heading] by own S^-1 r, the rest (clones, points, velocity, gyro bias) with
+  // their correlations. The covariance is kept (see the header).
+  Eigen::MatrixXd PCt = state.P * C.transpose();
+  const Eigen::Vector4d raise = own.diagonal() - (C * PCt).diagonal();
+  PCt += gauge_directions(state, p) * raise.asDiagonal();
+  const Eigen::VectorXd dx = PCt * S.solve(fix.residual);
+  if (!dx.allFinite()) return absl::InvalidArgumentError("apply_pose_fix: the correction is not finite");
+  fix.correction = C * dx;
+  state.apply_correction(dx);
+  fix.applied = true;
+  return fix;
 }
 
 }  // namespace mrvs::edge

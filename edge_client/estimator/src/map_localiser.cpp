@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <tuple>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -19,9 +20,6 @@ namespace {
 
 using localisation::Status;
 
-/// 99 % quantile of chi-square with 4 degrees of freedom.
-constexpr double kChi2Agree4 = 13.277;
-
 std::uint64_t cell_key(const Vec3d& p, double cell) {
   const Eigen::Vector3i c = (p / cell).array().floor().cast<int>();
   return mix64((static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 42) ^
@@ -31,14 +29,7 @@ std::uint64_t cell_key(const Vec3d& p, double cell) {
 
 /// [position; yaw] covariance of `a` moved from its anchor to the map point x_m.
 Eigen::Matrix4d covariance_at(const Alignment& a, const Vec3d& x_m) {
-  Eigen::Matrix4d S;
-  const int idx[4] = {0, 1, 2, 5};
-  for (int i = 0; i < 4; ++i) {
-    for (int j = 0; j < 4; ++j) S(i, j) = a.covariance(idx[i], idx[j]);
-  }
-  Eigen::Matrix4d G = Eigen::Matrix4d::Identity();
-  G.block<3, 1>(0, 3) = Vec3d::UnitZ().cross(x_m - a.anchor_m);
-  return G * S * G.transpose();
+  return position_yaw_covariance(a.covariance, a.anchor_m, x_m);
 }
 
 }  // namespace
@@ -60,6 +51,21 @@ std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix
   return prior;
 }
 
+std::optional<localisation::PriorRegion> restart_prior(const RunEnd& end, TimestampNs start_ns, double path_m,
+                                                       const LocalisationOptions& o) {
+  if (o.restart_radius_m <= 0.0) return std::nullopt;
+  const double gap_s = std::max(0.0, to_seconds(start_ns - end.t_ns));
+  return localisation::PriorRegion{end.p_m,
+                                   o.restart_radius_m + end.speed_mps * gap_s + std::max(0.0, path_m)};
+}
+
+std::optional<localisation::PriorRegion> tighter(const std::optional<localisation::PriorRegion>& a,
+                                                 const std::optional<localisation::PriorRegion>& b) {
+  if (!a) return b;
+  if (!b) return a;
+  return a->radius_m <= b->radius_m ? a : b;
+}
+
 MapLocaliser::MapLocaliser(const LocalisationOptions& options)
     : options_(options), window_s_(options.window_s) {}
 
@@ -74,23 +80,66 @@ void MapLocaliser::reset() {
   last_dense_ns_ = 0;
   window_s_ = options_.window_s;
   requests_ = 0;
+  tracking_ = false;
+  refused_in_a_row_ = 0;
+  confirmed_ = false;
   status_ = "restarted";
+}
+
+bool MapLocaliser::note_fix(bool applied) {
+  refused_in_a_row_ = applied ? 0 : refused_in_a_row_ + 1;
+  // Until a fix has been applied the lock is on probation: the first refusal doubts it.
+  const bool on_probation = !confirmed_;
+  confirmed_ = confirmed_ || applied;
+  if (applied) {  // all is well: the next one in track_interval_s
+    next_request_ns_ = std::max(next_request_ns_, last_sent_ns_ + from_seconds(options_.track_interval_s));
+    return false;
+  }
+  if (options_.doubt_after_refusals <= 0 ||
+      (!on_probation && refused_in_a_row_ < options_.doubt_after_refusals))
+    return false;
+  const int refused = refused_in_a_row_;
+  reset();
+  status_ = on_probation
+                ? std::string(
+                      "the first pose fix after the lock disagreed with it: the lock is doubted, "
+                      "searching the map again")
+                : fmt::format(
+                      "{} pose fixes in a row disagreed with the filter: the lock is doubted, searching "
+                      "the map again",
+                      refused);
+  return true;
+}
+
+void MapLocaliser::start_tracking(TimestampNs t_ns) {
+  const std::string placed = status_;
+  reset();
+  tracking_ = true;
+  first_ns_ = t_ns;
+  // The first fix soon (as soon as window_s of new data is there): it checks the lock.
+  next_request_ns_ = t_ns + from_seconds(std::min(options_.track_interval_s, options_.window_s));
+  status_ = placed;
+}
+
+bool MapLocaliser::gathering(TimestampNs t_ns) const {
+  if (!tracking_) return true;
+  return options_.track_interval_s > 0.0 && t_ns >= next_request_ns_ - from_seconds(window_s_);
 }
 
 void MapLocaliser::add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o,
                               const Vec3d& viewpoint_o) {
-  if (!points_o.empty()) dense_.emplace_back(Seen{t_ns, viewpoint_o}, points_o);
+  if (!points_o.empty() && gathering(t_ns)) dense_.emplace_back(Seen{t_ns, viewpoint_o}, points_o);
   last_dense_ns_ = t_ns;
 }
 
 void MapLocaliser::set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o,
                                    const Vec3d& viewpoint_o) {
-  if (options_.submap_source == "dense_stereo") return;
+  if (options_.submap_source == "dense_stereo" || !gathering(t_ns)) return;
   tracks_[id] = {Seen{t_ns, viewpoint_o}, p_o};
 }
 
 bool MapLocaliser::wants_dense(TimestampNs t_ns) const {
-  return options_.submap_source != "tracks" &&
+  return options_.submap_source != "tracks" && gathering(t_ns) &&
          (last_dense_ns_ == 0 || t_ns - last_dense_ns_ >= from_seconds(options_.dense_interval_s));
 }
 
@@ -153,6 +202,7 @@ std::optional<localisation::Request> MapLocaliser::build_request(TimestampNs t_n
 std::optional<Alignment> MapLocaliser::step(TimestampNs t_ns, const Vec3d& anchor_o,
                                             const std::optional<localisation::PriorRegion>& prior,
                                             MapService& service, LocalisationFrameStats* stats) {
+  if (!active()) return std::nullopt;
   if (!first_ns_) {
     first_ns_ = t_ns;
     next_request_ns_ = t_ns + from_seconds(options_.first_request_s);
@@ -183,7 +233,10 @@ std::optional<Alignment> MapLocaliser::step(TimestampNs t_ns, const Vec3d& ancho
   q->seq = next_seq_++;
   q->prior = prior;
   auto sent = service.send_localisation(*q, static_cast<float>(options_.quantum_m));
-  next_request_ns_ = t_ns + from_seconds(options_.interval_s);
+  // Tracking: the next fix as soon as there is new data, unless this one is applied (note_fix).
+  next_request_ns_ = t_ns + from_seconds(tracking_ ? std::min(options_.track_interval_s, options_.window_s)
+                                                   : options_.interval_s);
+  last_sent_ns_ = t_ns;
   if (!sent.ok()) {
     status_ = fmt::format("localisation request not sent: {}", std::string(sent.status().message()));
     return std::nullopt;
@@ -193,8 +246,8 @@ std::optional<Alignment> MapLocaliser::step(TimestampNs t_ns, const Vec3d& ancho
   ++stats->requests;
   stats->bytes_up += *sent;
   stats->submap_points = static_cast<int>(q->points.size());
-  status_ = fmt::format("localisation request {} sent ({} points, {:.1f} s of data, {} B)", q->seq,
-                        q->points.size(), window_s_, *sent);
+  status_ = fmt::format("{} request {} sent ({} points, {:.1f} s of data, {} B)",
+                        tracking_ ? "pose fix" : "localisation", q->seq, q->points.size(), window_s_, *sent);
   return std::nullopt;
 }
 
@@ -213,13 +266,17 @@ std::optional<Alignment> MapLocaliser::handle(const LocalisationReply& reply, Lo
   stats->rtt_ms = 1e-6 * static_cast<double>(reply.rtt_ns);
   stats->cloud_ms = r.time_ms;
   stats->reply = fmt::format("{}: {}", localisation::status_name(r.status), r.detail);
+  if (tracking_) return handle_fix(reply, p);
   Alignment a{r.T_m_o, r.covariance, r.T_m_o * p.anchor_o, p.t_ns, p.from_ns, r.fitness, r.ambiguity};
   if (r.status != Status::kOk) {
     // A best guess: the cloud refined distinct poses and could not tell the best from a rival
     // (not a search that gave up, hypotheses 0).
     if (options_.guesses_confirm && r.status == Status::kAmbiguous && r.hypotheses > 0) {
-      if (auto ok = take_guess(a)) {
-        return accept(*ok, fmt::format("an ok answer confirmed by answer {}'s best guess", p.seq), stats);
+      if (take_guess(a)) {
+        std::vector<Alignment> agreeing = candidates_;
+        agreeing.push_back(a);
+        return accept(fuse(agreeing), fmt::format("an ok answer confirmed by answer {}'s best guess", p.seq),
+                      stats);
       }
     }
     refuse(fmt::format("the cloud answered request {} '{}' ({})", p.seq, localisation::status_name(r.status),
@@ -253,10 +310,70 @@ std::optional<Alignment> MapLocaliser::handle(const LocalisationReply& reply, Lo
     spdlog::info("localisation: {}", status_);
     return std::nullopt;
   }
-  return accept(a,
+  std::vector<Alignment> agreeing = candidates_;
+  if (guessed) agreeing.push_back(*confirming_guess(a));
+  return accept(fuse(agreeing),
                 fmt::format("answer {} ({} agreeing{})", p.seq, candidates_.size(),
                             guessed ? ", and an earlier best guess" : ""),
                 stats);
+}
+
+Alignment MapLocaliser::fuse(std::vector<Alignment> agreeing) const {
+  std::sort(agreeing.begin(), agreeing.end(),
+            [](const Alignment& a, const Alignment& b) { return a.t_ns < b.t_ns; });
+  const Alignment& last = agreeing.back();
+  // Each answer's [position; yaw] of the newest anchor, weighed by its covariance there (the
+  // older ones' also by the agreement floors: the VIO's drift between the submaps).
+  const Vec3d x_o = last.T_m_o.inverse() * last.anchor_m;
+  Eigen::Matrix4d information = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d weighted = Eigen::Vector4d::Zero();
+  for (std::size_t k = 0; k < agreeing.size(); ++k) {
+    const Alignment& b = agreeing[k];
+    Eigen::Vector4d z;
+    z.head<3>() = b.T_m_o * x_o;
+    z(3) = std::remainder(yaw_of(b.T_m_o) - yaw_of(last.T_m_o), 2.0 * kPi);
+    Eigen::Matrix4d S = covariance_at(b, z.head<3>());
+    if (k + 1 < agreeing.size()) {
+      S.diagonal().head<3>().array() += options_.agree_floor_m * options_.agree_floor_m;
+      S(3, 3) += std::pow(options_.agree_floor_deg * kDegToRad, 2);
+    }
+    const Eigen::LDLT<Eigen::Matrix4d> ldlt(S);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || (ldlt.vectorD().array() <= 0.0).any())
+      return last;  // a singular covariance: no weighing, the newest answer as it is
+    information += ldlt.solve(Eigen::Matrix4d::Identity());
+    weighted += ldlt.solve(z);
+  }
+  const Eigen::Matrix4d covariance = information.inverse();
+  const Eigen::Vector4d mean = covariance * weighted;
+  // The newest placement turned about its anchor by the fused yaw and moved to the fused position.
+  const Vec3d x = last.anchor_m;
+  const Mat3d Rz = Eigen::AngleAxisd(mean(3), Vec3d::UnitZ()).toRotationMatrix();
+  Alignment f = last;
+  f.T_m_o = SE3d(Quatd(Rz), mean.head<3>() - Rz * x) * last.T_m_o;
+  f.anchor_m = f.T_m_o * x_o;
+  f.covariance = Mat6d::Zero();
+  const int idx[4] = {0, 1, 2, 5};
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) f.covariance(idx[i], idx[j]) = covariance(i, j);
+  }
+  f.covariance = 0.5 * (f.covariance + f.covariance.transpose()).eval();
+  for (const Alignment& b : agreeing) {
+    f.from_ns = std::min(f.from_ns, b.from_ns);
+    if (b.ambiguity < f.ambiguity) std::tie(f.fitness, f.ambiguity) = std::tie(b.fitness, b.ambiguity);
+  }
+  return f;
+}
+
+std::optional<Alignment> MapLocaliser::handle_fix(const LocalisationReply& reply, const Pending& p) {
+  const localisation::Result& r = reply.result;
+  if (r.status != Status::kOk || r.ambiguity > options_.max_ambiguity) {
+    status_ = fmt::format("pose fix {} not used: the cloud answered '{}' ({})", p.seq,
+                          localisation::status_name(r.status), r.detail);
+    spdlog::debug("localisation: {}", status_);
+    return std::nullopt;
+  }
+  status_ = fmt::format("pose fix {}: fitness {:.2f}, ambiguity {:.2f}", p.seq, r.fitness, r.ambiguity);
+  return Alignment{r.T_m_o, r.covariance, r.T_m_o * p.anchor_o, p.t_ns, p.from_ns, r.fitness, r.ambiguity};
 }
 
 std::optional<Alignment> MapLocaliser::take_guess(const Alignment& guess) {
@@ -304,7 +421,7 @@ bool MapLocaliser::agree(const Alignment& earlier, const Alignment& later) const
   const double m2 = d.dot(S.ldlt().solve(d));
   spdlog::debug("localisation agreement: {:.3f} m, {:.2f} deg, Mahalanobis^2 {:.1f}", d.head<3>().norm(),
                 d(3) * kRadToDeg, m2);
-  return std::isfinite(m2) && m2 <= kChi2Agree4;
+  return std::isfinite(m2) && m2 <= kChi2Pose4;
 }
 
 }  // namespace mrvs::edge

@@ -7,6 +7,9 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <Eigen/Eigenvalues>
+
+#include "mrvs/geometry/angles.h"
 
 namespace mrvs::edge {
 namespace {
@@ -138,6 +141,8 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
   // frame is taken as the map frame (the user's choice).
   in_map_frame_ = options_.alignment.source != "map";
   localiser_.reset();
+  run_path_m_ = 0.0;
+  run_last_p_ = state.imu.p_w_b;
   // The body rate at the start (for the clone's time-offset Jacobian).
   const auto rates = propagate(state.imu, imu_vector(), state.imu.t_ns, g_w_, noise_);
   last_w_b_ = rates.ok() ? rates->last_rates.w : Vec3d::Zero();
@@ -149,10 +154,15 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
   db_.add(frame);
   init_ns_ = frame.t_ns;
   ++run_;
+  const std::optional<localisation::PriorRegion> near_end =
+      last_placed_ ? restart_prior(*last_placed_, frame.t_ns, 0.0, options_.localisation) : std::nullopt;
   init_summary_ = fmt::format(
-      "initialised ({}) at {} ns: {}; alignment {}{}", init.method, frame.t_ns, init.detail,
+      "initialised ({}) at {} ns: {}; alignment {}{}{}", init.method, frame.t_ns, init.detail,
       options_.alignment.source,
-      localises() ? " (plain VIO in the odometry frame until the cloud places it in the map)" : "");
+      localises() ? " (plain VIO in the odometry frame until the cloud places it in the map)" : "",
+      near_end ? fmt::format("; searched within {:.2f} m (plus the path since) of where the last run ended",
+                             near_end->radius_m)
+               : std::string());
   waiting_.clear();
   return absl::OkStatus();
 }
@@ -171,6 +181,9 @@ std::optional<std::string> VioEstimator::imu_gap(TimestampNs from_ns, TimestampN
 
 void VioEstimator::restart() {
   if (state_) last_pose_ = SE3d(state_->imu.q_w_b, state_->imu.p_w_b);
+  last_placed_.reset();
+  if (state_ && in_map_frame_ && localises())
+    last_placed_ = RunEnd{state_->imu.p_w_b, state_->imu.v_w_b.norm(), state_->imu.t_ns};
   state_.reset();
   in_map_frame_ = false;
   localiser_.reset();
@@ -213,8 +226,9 @@ StatusOr<FrameOutput> VioEstimator::track(const FeatureFrame& frame) {
   db_.add(frame);
   out.timing.propagate_ms = ms_since(t0);
   std::vector<std::pair<FeatureId, Vec3d>> triangulated;
-  update(frame, &out, localises() && !in_map_frame_ ? &triangulated : nullptr);
-  if (localises() && !in_map_frame_) localise(frame, triangulated, &out);
+  const bool localising = localises() && localiser_.active();
+  update(frame, &out, localising && localiser_.gathering(frame.t_ns) ? &triangulated : nullptr);
+  if (localising) localise(frame, triangulated, &out);
   out.in_map_frame = in_map_frame_;
   out.T_w_b = SE3d(state_->imu.q_w_b, state_->imu.p_w_b);
   out.t_imu_ns = state_->imu.t_ns;
@@ -317,7 +331,7 @@ bool VioEstimator::localises() const {
 }
 
 bool VioEstimator::wants_dense_submap(TimestampNs t_cam_ns) const {
-  return state_ && localises() && !in_map_frame_ && localiser_.wants_dense(t_cam_ns);
+  return state_ && localises() && localiser_.active() && localiser_.wants_dense(t_cam_ns);
 }
 
 void VioEstimator::add_dense_submap(TimestampNs t_cam_ns, const std::vector<Eigen::Vector3f>& points_c0) {
@@ -332,29 +346,86 @@ void VioEstimator::add_dense_submap(TimestampNs t_cam_ns, const std::vector<Eige
 void VioEstimator::localise(const FeatureFrame& frame,
                             const std::vector<std::pair<FeatureId, Vec3d>>& triangulated, FrameOutput* out) {
   State& s = *state_;
-  const Vec3d camera = s.T_w_c(frame.t_ns, 0).translation();
-  for (const auto& [id, p] : triangulated) localiser_.set_track_point(id, frame.t_ns, p, camera);
-  for (const auto& [id, p] : s.points) localiser_.set_track_point(id, frame.t_ns, p.p_w, camera);
-  const std::optional<localisation::PriorRegion> prior =
-      gnss_prior(gnss_, s.imu.t_ns, options_.localisation.window_s, gnss_lever_arm_m_, options_.localisation);
+  if (localiser_.gathering(frame.t_ns)) {
+    const Vec3d camera = s.T_w_c(frame.t_ns, 0).translation();
+    for (const auto& [id, p] : triangulated) localiser_.set_track_point(id, frame.t_ns, p, camera);
+    for (const auto& [id, p] : s.points) localiser_.set_track_point(id, frame.t_ns, p.p_w, camera);
+  }
+  run_path_m_ += (s.imu.p_w_b - run_last_p_).norm();
+  run_last_p_ = s.imu.p_w_b;
+  const std::optional<localisation::PriorRegion> prior = in_map_frame_ ? tracking_prior() : search_prior();
   const std::optional<Alignment> a =
       localiser_.step(frame.t_ns, s.imu.p_w_b, prior, *map_, &out->localisation);
   if (!a) return;
-  if (const Status st = reanchor_state(s, a->T_m_o, a->covariance, a->anchor_m); !st.ok()) {
-    spdlog::warn("localisation answer not applied: {}", std::string(st.message()));
+  if (in_map_frame_) {
+    apply_fix(*a, &out->localisation);
     return;
   }
+  if (!move_to(*a)) return;
+  in_map_frame_ = true;
+  localiser_.start_tracking(frame.t_ns);
+  out->T_m_o = yaw_only(a->T_m_o);
+  spdlog::info("{} after {:.1f} s: the filter is in the map frame", localiser_.status(),
+               to_seconds(frame.t_ns - init_ns_));
+}
+
+bool VioEstimator::move_to(const Alignment& a) {
+  if (const Status st = reanchor_state(*state_, a.T_m_o, a.covariance, a.anchor_m); !st.ok()) {
+    spdlog::warn("localisation answer not applied: {}", std::string(st.message()));
+    return false;
+  }
   // The linearisation point of the newest clone moves with the state.
-  const SE3d T = yaw_only(a->T_m_o);
+  const SE3d T = yaw_only(a.T_m_o);
   imu_fej_.q_w_b = (T.quaternion() * imu_fej_.q_w_b).normalized();
   imu_fej_.p_w_b = T * imu_fej_.p_w_b;
   imu_fej_.v_w_b = T.rotation_matrix() * imu_fej_.v_w_b;
   registered_ = RegisteredMap(options_.map.registered_voxel_m, options_.map.registered_per_voxel);
   surfaces_ = SurfaceMap(options_.map.plane_radius_m, kSurfacePointsPerCell);
-  in_map_frame_ = true;
-  out->T_m_o = T;
-  spdlog::info("{} after {:.1f} s: the filter is in the map frame", localiser_.status(),
-               to_seconds(frame.t_ns - init_ns_));
+  return true;
+}
+
+std::optional<localisation::PriorRegion> VioEstimator::search_prior() const {
+  const LocalisationOptions& o = options_.localisation;
+  std::optional<localisation::PriorRegion> prior =
+      gnss_prior(gnss_, state_->imu.t_ns, o.window_s, gnss_lever_arm_m_, o);
+  if (last_placed_) prior = tighter(prior, restart_prior(*last_placed_, init_ns_, run_path_m_, o));
+  return prior;
+}
+
+localisation::PriorRegion VioEstimator::tracking_prior() const {
+  const State& s = *state_;
+  const Mat3d P_p = s.P.block<3, 3>(s.imu_slot.offset + 3, s.imu_slot.offset + 3);
+  const double sigma =
+      std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3d>(P_p).eigenvalues().maxCoeff()));
+  return {s.imu.p_w_b, options_.localisation.track_radius_m + 3.0 * sigma};
+}
+
+void VioEstimator::apply_fix(const Alignment& a, LocalisationFrameStats* stats) {
+  const LocalisationOptions& o = options_.localisation;
+  const Eigen::Vector4d floor(o.fix_floor_m, o.fix_floor_m, o.fix_floor_m, o.fix_floor_deg * kDegToRad);
+  const StatusOr<PoseFix> fix = apply_pose_fix(*state_, a.T_m_o, a.covariance, a.anchor_m, floor);
+  const bool applied = fix.ok() && fix->applied;
+  if (localiser_.note_fix(applied)) {
+    // The filter's frame is not the map's after all: it is the odometry frame again until the
+    // cloud places it anew (rays off meanwhile; the poses since are re-mapped then).
+    in_map_frame_ = false;
+    stats->doubted = true;
+    spdlog::warn("localisation: {}; plain VIO until then", localiser_.status());
+  }
+  if (!applied) {
+    ++stats->fixes_refused;
+    spdlog::info(
+        "localisation: pose fix not applied: {}",
+        fix.ok() ? fmt::format("it moves the filter {:.3f} m / {:.2f} deg, beyond its gate (Mahalanobis^2 "
+                               "{:.1f} > {:.1f})",
+                               fix->residual.head<3>().norm(), fix->residual(3) * kRadToDeg,
+                               fix->mahalanobis2, kChi2Pose4)
+                 : std::string(fix.status().message()));
+    return;
+  }
+  ++stats->fixes_applied;
+  spdlog::debug("localisation: pose fix applied: {:.3f} m / {:.2f} deg (Mahalanobis^2 {:.1f})",
+                fix->residual.head<3>().norm(), fix->residual(3) * kRadToDeg, fix->mahalanobis2);
 }
 
 void VioEstimator::marginalize(TimestampNs marg_ns, FrameOutput* out) {

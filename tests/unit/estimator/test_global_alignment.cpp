@@ -224,3 +224,125 @@ TEST(Reanchor, RefusesABrokenCovariance) {
 
 }  // namespace
 }  // namespace mrvs::edge
+
+// ---- Pose fixes: a localisation answer once the state is in the map frame ----------------
+
+namespace mrvs::edge {
+namespace {
+
+/// A running state whose uncertainty is mostly where it lies (position sigma `sigma_m`,
+/// heading `sigma_deg` along the gauge directions through the IMU) plus a little relative one.
+State drifting_state(double sigma_m, double sigma_deg) {
+  State s = running_state();
+  s.P *= 0.01;
+  const Eigen::MatrixXd N = gauge_directions(s, s.imu.p_w_b);
+  Eigen::Vector4d g;
+  g << sigma_m, sigma_m, sigma_m, sigma_deg * kDeg;
+  s.P += N * g.array().square().matrix().asDiagonal() * N.transpose();
+  return s;
+}
+
+/// [position; yaw] of the IMU (the yaw: of R_w_b about +z).
+Eigen::Vector4d position_yaw(const State& s) {
+  Eigen::Vector4d x;
+  x.head<3>() = s.imu.p_w_b;
+  x(3) = yaw_of(SE3d(s.imu.q_w_b, Vec3d::Zero()));
+  return x;
+}
+
+/// C P C^T: the [position; heading] covariance of the IMU (gauge rows through it).
+Eigen::Matrix4d own_covariance(const State& s) {
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(4, s.dim());
+  C.block<3, 3>(0, 3).setIdentity();
+  C.block<1, 3>(3, 0) = (s.imu.q_w_b.conjugate() * Vec3d::UnitZ()).transpose();
+  return C * s.P * C.transpose();
+}
+
+TEST(PoseFix, TheStateMovesByTheBayesCombinationAndKeepsItsCovariance) {
+  const State before = drifting_state(0.05, 1.0);
+  State s = before;
+  const SE3d T_fix(Quatd(Eigen::AngleAxisd(0.6 * kDeg, Vec3d::UnitZ())), Vec3d(0.03, -0.02, 0.01));
+  const Vec3d anchor_m = before.imu.p_w_b + Vec3d(0.5, -0.3, 0.0);
+  const auto fix = apply_pose_fix(s, T_fix, alignment_covariance(), anchor_m);
+  ASSERT_TRUE(fix.ok()) << fix.status();
+  ASSERT_TRUE(fix->applied);
+  // The measured error at the IMU: where T_fix puts it, and T_fix's yaw.
+  const Vec3d measured = T_fix * before.imu.p_w_b - before.imu.p_w_b;
+  EXPECT_MATRIX_NEAR(fix->residual.head<3>(), measured, 1e-12);
+  EXPECT_NEAR(fix->residual(3), 0.6 * kDeg, 1e-12);
+  // Brute force: the linear-Gaussian combination of the filter's [p; yaw] (prior Sigma) and the
+  // answer's (R, moved to the IMU): the IMU moves by Sigma (Sigma + R)^-1 r.
+  const Eigen::Matrix4d Sigma = own_covariance(before);
+  const Eigen::Matrix4d R = position_yaw_covariance(alignment_covariance(), anchor_m, before.imu.p_w_b);
+  const Eigen::Vector4d expected = Sigma * (Sigma + R).ldlt().solve(fix->residual);
+  EXPECT_MATRIX_NEAR(fix->correction, expected, 1e-12);
+  Eigen::Vector4d moved = position_yaw(s) - position_yaw(before);
+  moved(3) = std::remainder(moved(3), 2.0 * M_PI);
+  EXPECT_MATRIX_NEAR(moved, expected, 2e-5);  // the heading to first order (a body-frame rotation)
+  EXPECT_NEAR(fix->mahalanobis2, fix->residual.dot((Sigma + R).ldlt().solve(fix->residual)), 1e-9);
+  // The window follows through its correlations: a clone moves about as the IMU does.
+  for (const auto& [t, c] : s.clones) {
+    const Vec3d d_clone = c.T_w_b.translation() - before.clones.at(t).T_w_b.translation();
+    EXPECT_LT((d_clone - expected.head<3>()).norm(), 0.2 * expected.head<3>().norm() + 2e-3) << t;
+  }
+  // What it knows stays.
+  EXPECT_EQ(s.P, before.P);
+}
+
+TEST(PoseFix, ATightAnswerTakesTheStateThereAndABroadOneBarelyMovesIt) {
+  const SE3d T_fix(Quatd(Eigen::AngleAxisd(-0.4 * kDeg, Vec3d::UnitZ())), Vec3d(-0.02, 0.04, 0.0));
+  State tight = drifting_state(0.05, 1.0);
+  const Eigen::Vector4d start = position_yaw(tight);
+  const Vec3d p0 = tight.imu.p_w_b;
+  Mat6d small = Mat6d::Zero();
+  small.diagonal() << 1e-8, 1e-8, 1e-8, 0.0, 0.0, 1e-10;
+  ASSERT_TRUE(apply_pose_fix(tight, T_fix, small, p0)->applied);
+  EXPECT_MATRIX_NEAR(tight.imu.p_w_b, T_fix * p0, 2e-4);
+  EXPECT_NEAR(position_yaw(tight)(3) - start(3), -0.4 * kDeg, 2e-4);
+  State broad = drifting_state(0.05, 1.0);
+  Mat6d large = Mat6d::Zero();
+  large.diagonal() << 1.0, 1.0, 1.0, 0.0, 0.0, 1.0;
+  ASSERT_TRUE(apply_pose_fix(broad, T_fix, large, p0)->applied);
+  EXPECT_LT((broad.imu.p_w_b - p0).norm(), 0.01 * 0.045);
+}
+
+TEST(PoseFix, TheFloorLetsAnOverconfidentFilterBeCorrected) {
+  // The filter claims 2 mm and 0.02 deg; the answer, 1 cm and 0.2 deg, says 6 cm and 1 deg.
+  const SE3d T_fix(Quatd(Eigen::AngleAxisd(1.0 * kDeg, Vec3d::UnitZ())), Vec3d(0.06, 0.0, 0.0));
+  Mat6d c = Mat6d::Zero();
+  c.diagonal() << 1e-4, 1e-4, 1e-4, 0.0, 0.0, std::pow(0.2 * kDeg, 2);
+  State stiff = drifting_state(0.002, 0.02);
+  const Vec3d p0 = stiff.imu.p_w_b;
+  const auto refused = apply_pose_fix(stiff, T_fix, c, p0);
+  ASSERT_TRUE(refused.ok());
+  EXPECT_FALSE(refused->applied);
+  // Trusted no better than 5 cm and 1 deg, it takes most of the correction.
+  const Eigen::Vector4d floor(0.05, 0.05, 0.05, 1.0 * kDeg);
+  const auto fix = apply_pose_fix(stiff, T_fix, c, p0, floor);
+  ASSERT_TRUE(fix.ok());
+  ASSERT_TRUE(fix->applied);
+  EXPECT_GT(fix->correction.head<3>().norm(), 0.8 * 0.06);
+  EXPECT_GT(fix->correction(3), 0.8 * kDeg);
+  EXPECT_LT(fix->correction(3), 1.0 * kDeg);
+}
+
+TEST(PoseFix, AnAnswerTheFilterCannotBelieveIsNotApplied) {
+  const State before = drifting_state(0.02, 0.5);
+  State s = before;
+  // 30 cm off, answered to 1 cm, while the filter knows its place to 2 cm.
+  Mat6d c = Mat6d::Zero();
+  c.diagonal() << 1e-4, 1e-4, 1e-4, 0.0, 0.0, 1e-5;
+  const auto fix = apply_pose_fix(s, SE3d(Quatd::Identity(), Vec3d(0.3, 0.0, 0.0)), c, s.imu.p_w_b);
+  ASSERT_TRUE(fix.ok());
+  EXPECT_FALSE(fix->applied);
+  EXPECT_GT(fix->mahalanobis2, kChi2Pose4);
+  EXPECT_EQ(s.imu.p_w_b, before.imu.p_w_b);
+  EXPECT_EQ(s.P, before.P);
+  // A broken covariance is an error, the state unchanged.
+  c(0, 0) = NAN;
+  EXPECT_EQ(apply_pose_fix(s, SE3d(), c, s.imu.p_w_b).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(s.P, before.P);
+}
+
+}  // namespace
+}  // namespace mrvs::edge

@@ -4,17 +4,21 @@
 // agreeing answers from independent data are; a disagreeing or ambiguous answer makes it ask
 // again with more data; stale replies are ignored; an unanswered request is asked again.
 #include <deque>
+#include <random>
 #include <thread>
 
 #include <gtest/gtest.h>
 
+#include "mrvs/edge/global_alignment.h"
 #include "mrvs/edge/map_localiser.h"
 #include "mrvs/geometry/angles.h"
+#include "mrvs/test/numeric_jacobian.h"
 
 namespace mrvs::edge {
 namespace {
 
 constexpr TimestampNs kSecond = 1'000'000'000;
+constexpr TimestampNs kMillisecond = 1'000'000;
 
 /// A cloud that records requests and answers each with the next scripted result (or nothing).
 class ScriptedCloud : public MapService {
@@ -66,18 +70,25 @@ LocalisationOptions options() {
   return o;
 }
 
+/// One frame at t, s seconds into a run: 30 new points of a wall seen from a camera moving
+/// along it, then the localiser's step with the given prior.
+std::optional<Alignment> see_wall_and_step(MapLocaliser& loc, ScriptedCloud& cloud, TimestampNs t, double s,
+                                           const std::optional<localisation::PriorRegion>& prior,
+                                           LocalisationFrameStats* stats) {
+  std::vector<Vec3d> pts;
+  for (int i = 0; i < 30; ++i) pts.emplace_back(3.0, 0.1 * i + s, 0.05 * (i % 7));
+  loc.add_points(t, pts, Vec3d(0.0, s, 1.0));
+  return loc.step(t, Vec3d(0.0, s, 1.0), prior, cloud, stats);
+}
+
 /// Feeds 30 new points a frame (a wall seen from moving cameras) at 20 Hz from t0 for `seconds`,
 /// stepping the localiser; the accepted alignment, if any.
 std::optional<Alignment> run(MapLocaliser& loc, ScriptedCloud& cloud, TimestampNs t0, double seconds,
                              LocalisationFrameStats* total = nullptr) {
   std::optional<Alignment> accepted;
   for (TimestampNs t = t0; t < t0 + static_cast<TimestampNs>(seconds * kSecond); t += kSecond / 20) {
-    const double s = to_seconds(t - t0);
-    std::vector<Vec3d> pts;
-    for (int i = 0; i < 30; ++i) pts.emplace_back(3.0, 0.1 * i + s, 0.05 * (i % 7));
-    loc.add_points(t, pts, Vec3d(0.0, s, 1.0));
     LocalisationFrameStats stats;
-    if (auto a = loc.step(t, Vec3d(0.0, s, 1.0), std::nullopt, cloud, &stats)) accepted = a;
+    if (auto a = see_wall_and_step(loc, cloud, t, to_seconds(t - t0), std::nullopt, &stats)) accepted = a;
     if (total) total->requests += stats.requests;
     if (accepted) break;
   }
@@ -106,6 +117,52 @@ TEST(MapLocaliser, TwoAgreeingAnswersFromNewDataPlaceTheFilter) {
   for (const auto& p : q.points) EXPECT_NEAR(p.x(), 3.0, 0.03);  // the wall, minus the anchor at x = 0
   EXPECT_EQ(q.gravity_o, Vec3d(0, 0, -1));
   EXPECT_EQ(a->anchor_m, T * q.anchor_o);
+}
+
+TEST(MapLocaliser, TheAgreeingAnswersAreCombinedByTheirCovariances) {
+  ScriptedCloud cloud;
+  const SE3d T1(Quatd(Eigen::AngleAxisd(0.3 * kDegToRad, Vec3d::UnitZ())), Vec3d(1.00, 2.0, 0.0));
+  const SE3d T2(Quatd(Eigen::AngleAxisd(-0.3 * kDegToRad, Vec3d::UnitZ())), Vec3d(1.02, 2.0, 0.01));
+  cloud.script = {ok_result(T1), ok_result(T2)};
+  LocalisationOptions o = options();
+  o.agree_floor_m = 0.0;  // no drift between the submaps: the plain mean of equal covariances
+  o.agree_floor_deg = 0.0;
+  MapLocaliser loc(o);
+  const auto a = run(loc, cloud, 0, 5.0);
+  ASSERT_TRUE(a.has_value()) << loc.status();
+  // Brute force: both placements [position; yaw] of the newest anchor x, each with its answer's
+  // covariance moved from its own anchor to x, combined by information.
+  const Vec3d x_o = cloud.sent[1].anchor_o;
+  const Mat6d c = ok_result(T1).covariance;
+  Eigen::Matrix4d info = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d sum = Eigen::Vector4d::Zero();
+  const SE3d Ts[2] = {T1, T2};
+  for (int k = 0; k < 2; ++k) {
+    Eigen::Vector4d z;
+    z << Ts[k] * x_o, yaw_of(Ts[k]) - yaw_of(T2);
+    const Eigen::Matrix4d W =
+        position_yaw_covariance(c, Ts[k] * cloud.sent[k].anchor_o, Ts[k] * x_o).inverse();
+    info += W;
+    sum += W * z;
+  }
+  const Eigen::Vector4d mean = info.inverse() * sum;
+  EXPECT_MATRIX_NEAR(a->T_m_o * x_o, Vec3d(mean.head<3>()), 1e-9);
+  EXPECT_NEAR(yaw_of(a->T_m_o) - yaw_of(T2), mean(3), 1e-9);
+  EXPECT_LT(std::abs(yaw_of(a->T_m_o)), 0.3 * kDegToRad);  // between the two
+  EXPECT_MATRIX_NEAR(a->anchor_m, Vec3d(a->T_m_o * x_o), 1e-12);
+  const Eigen::Matrix4d fused = info.inverse();
+  EXPECT_NEAR(a->covariance(0, 0), fused(0, 0), 1e-12);
+  EXPECT_NEAR(a->covariance(5, 5), fused(3, 3), 1e-12);
+  EXPECT_LT(a->covariance(0, 0), c(0, 0));
+  EXPECT_EQ(a->from_ns, cloud.sent[0].stamp_ns - kSecond);  // both submaps' data: from the first's start
+  // With the floors, the older answer weighs less: the fused yaw leans to the newer one's.
+  ScriptedCloud cloud2;
+  cloud2.script = {ok_result(T1), ok_result(T2)};
+  MapLocaliser floored(options());
+  const auto b = run(floored, cloud2, 0, 5.0);
+  ASSERT_TRUE(b.has_value()) << floored.status();
+  EXPECT_LT(yaw_of(b->T_m_o), -0.1 * kDegToRad);
+  EXPECT_GT(yaw_of(b->T_m_o), -0.3 * kDegToRad);
 }
 
 TEST(MapLocaliser, OneAnswerIsNotEnoughAndDisagreementStartsOver) {
@@ -161,7 +218,7 @@ TEST(MapLocaliser, ABestGuessConfirmsAnOkAnswerFromNewDataBeforeOrAfterIt) {
     const auto a = run(loc, cloud, 0, 3.0);
     ASSERT_TRUE(a.has_value()) << loc.status();
     EXPECT_EQ(cloud.sent.size(), 2u);
-    EXPECT_EQ(a->ambiguity, 0.3);  // the ok answer is the one used
+    EXPECT_EQ(a->ambiguity, 0.3);  // the ok answer's verdict (the two are combined)
     EXPECT_LT((a->T_m_o.translation() - T.translation()).norm(), 1e-12);
     EXPECT_NE(loc.status().find("best guess"), std::string::npos) << loc.status();
   }
@@ -257,6 +314,126 @@ TEST(MapLocaliser, AnUnansweredRequestIsAskedAgainAndItsLateReplyIgnored) {
   EXPECT_EQ(cloud.sent.size(), 3u);
 }
 
+/// Tracking after the lock: frames from t0 for `seconds` (points as run()), the given prior on
+/// every request, every fix applied (as the filter's gate would); the pose fixes step() returned.
+std::vector<Alignment> track(MapLocaliser& loc, ScriptedCloud& cloud, TimestampNs t0, double seconds,
+                             const localisation::PriorRegion& prior) {
+  std::vector<Alignment> fixes;
+  for (TimestampNs t = t0; t < t0 + static_cast<TimestampNs>(seconds * kSecond); t += kSecond / 20) {
+    LocalisationFrameStats stats;
+    if (auto a = see_wall_and_step(loc, cloud, t, to_seconds(t - t0), prior, &stats)) {
+      fixes.push_back(*a);
+      EXPECT_FALSE(loc.note_fix(true));
+    }
+  }
+  return fixes;
+}
+
+TEST(MapLocaliser, OncePlacedItAsksForAPoseFixEveryTrackIntervalWithItsPrior) {
+  ScriptedCloud cloud;
+  const SE3d T(Quatd(Eigen::AngleAxisd(0.3, Vec3d::UnitZ())), Vec3d(1.0, 2.0, 0.0));
+  cloud.script = {ok_result(T), ok_result(T)};
+  LocalisationOptions o = options();
+  o.track_interval_s = 2.0;
+  MapLocaliser loc(o);
+  const auto a = run(loc, cloud, 0, 5.0);
+  ASSERT_TRUE(a.has_value()) << loc.status();
+  const TimestampNs lock = cloud.sent.back().stamp_ns;
+  loc.start_tracking(lock);
+  EXPECT_TRUE(loc.tracking());
+  EXPECT_TRUE(loc.active());
+  // The first fix window_s (1 s) after the lock (it checks the lock): new data from the lock on.
+  EXPECT_TRUE(loc.gathering(lock + kSecond / 2));
+  // In the map frame now: an ok answer is a fix, an ambiguous or refused one is not.
+  const SE3d fix(Quatd(Eigen::AngleAxisd(0.002, Vec3d::UnitZ())), Vec3d(0.02, -0.01, 0.0));
+  localisation::Result refused;
+  refused.status = localisation::Status::kTooLittleStructure;
+  cloud.script = {ok_result(fix), ok_result(fix, 0.95), refused, ok_result(fix)};
+  const localisation::PriorRegion prior{Vec3d(5.0, 6.0, 1.0), 1.2};
+  const std::vector<Alignment> fixes = track(loc, cloud, lock + kSecond / 20, 8.1, prior);
+  // After an applied fix the next one comes track_interval_s (2 s) later, after any other
+  // answer window_s (1 s) later: at 1 (ok), 3 (ambiguous), 4 (refused), 5 (ok), 7 s.
+  const double at[] = {1.0, 3.0, 4.0, 5.0, 7.0};
+  ASSERT_EQ(cloud.sent.size(), 7u);
+  // Between an applied fix (at 5 s) and window_s before the next request (8 s: the one at 7 s
+  // is unanswered), nothing is gathered.
+  EXPECT_FALSE(loc.gathering(cloud.sent[5].stamp_ns + kSecond / 2));
+  EXPECT_FALSE(loc.wants_dense(cloud.sent[5].stamp_ns + kSecond / 2));
+  EXPECT_TRUE(loc.gathering(cloud.sent[6].stamp_ns));
+  for (std::size_t k = 2; k < cloud.sent.size(); ++k) {
+    EXPECT_NEAR(to_seconds(cloud.sent[k].stamp_ns - lock), at[k - 2], 0.051) << k;
+    ASSERT_TRUE(cloud.sent[k].prior.has_value());
+    EXPECT_EQ(cloud.sent[k].prior->centre_m, prior.centre_m);
+    EXPECT_EQ(cloud.sent[k].prior->radius_m, prior.radius_m);
+    // Only the last window_s of data: the wall's points seen in it lie from 1 m behind the
+    // anchor (y = 0.1 i + s, the anchor at y = s) on; older ones would lie farther back.
+    ASSERT_FALSE(cloud.sent[k].points.empty());
+    for (const auto& p : cloud.sent[k].points) EXPECT_GE(p.y(), -1.0 - 1e-4) << k;
+  }
+  ASSERT_EQ(fixes.size(), 2u);
+  for (const Alignment& f : fixes) {
+    EXPECT_MATRIX_NEAR(f.T_m_o.translation(), fix.translation(), 1e-12);
+    EXPECT_LE(f.from_ns, f.t_ns - static_cast<TimestampNs>(0.99 * kSecond));
+  }
+}
+
+TEST(MapLocaliser, WithoutATrackIntervalItStopsAskingOncePlaced) {
+  ScriptedCloud cloud;
+  cloud.script = {ok_result(SE3d()), ok_result(SE3d())};
+  MapLocaliser loc(options());  // track_interval_s 0
+  ASSERT_TRUE(run(loc, cloud, 0, 5.0).has_value()) << loc.status();
+  loc.start_tracking(3 * kSecond);
+  EXPECT_FALSE(loc.active());
+  EXPECT_FALSE(loc.gathering(10 * kSecond));
+  cloud.script = {ok_result(SE3d())};
+  EXPECT_TRUE(track(loc, cloud, 3 * kSecond, 10.0, {}).empty());
+  EXPECT_EQ(cloud.sent.size(), 2u);
+  // A restart forgets the tracking: it localises again from scratch.
+  loc.reset();
+  EXPECT_FALSE(loc.tracking());
+  EXPECT_TRUE(loc.active());
+  EXPECT_TRUE(loc.gathering(20 * kSecond));
+}
+
+TEST(MapLocaliser, PoseFixesRefusedInARowDoubtTheLockAndItSearchesAgain) {
+  ScriptedCloud cloud;
+  cloud.script = {ok_result(SE3d()), ok_result(SE3d())};
+  LocalisationOptions o = options();
+  o.track_interval_s = 2.0;
+  o.doubt_after_refusals = 3;
+  MapLocaliser loc(o);
+  ASSERT_TRUE(run(loc, cloud, 0, 5.0).has_value()) << loc.status();
+  loc.start_tracking(3 * kSecond);
+  // A first fix applied ends the probation; two refusals, then an applied fix: the count
+  // starts over.
+  EXPECT_FALSE(loc.note_fix(true));
+  EXPECT_FALSE(loc.note_fix(false));
+  EXPECT_FALSE(loc.note_fix(false));
+  EXPECT_FALSE(loc.note_fix(true));
+  EXPECT_FALSE(loc.note_fix(false));
+  EXPECT_FALSE(loc.note_fix(false));
+  EXPECT_TRUE(loc.tracking());
+  // The third in a row: doubted, back to the search (no prior, two agreeing answers needed).
+  EXPECT_TRUE(loc.note_fix(false));
+  EXPECT_FALSE(loc.tracking());
+  EXPECT_NE(loc.status().find("doubted"), std::string::npos) << loc.status();
+  const std::size_t before = cloud.sent.size();
+  cloud.script = {ok_result(SE3d()), ok_result(SE3d())};
+  EXPECT_TRUE(run(loc, cloud, 20 * kSecond, 5.0).has_value()) << loc.status();
+  EXPECT_EQ(cloud.sent.size(), before + 2);
+  EXPECT_FALSE(cloud.sent.back().prior.has_value());
+  // On probation (no fix applied since the lock), the first refusal doubts it.
+  loc.start_tracking(30 * kSecond);
+  EXPECT_TRUE(loc.note_fix(false));
+  EXPECT_NE(loc.status().find("first pose fix"), std::string::npos) << loc.status();
+  // With doubt_after_refusals 0 it never doubts.
+  o.doubt_after_refusals = 0;
+  MapLocaliser trusting(o);
+  trusting.start_tracking(0);
+  for (int k = 0; k < 10; ++k) EXPECT_FALSE(trusting.note_fix(false));
+  EXPECT_TRUE(trusting.tracking());
+}
+
 TEST(MapLocaliser, TheGnssPriorIsTheMedianOfTheWindowWithARadiusFromItsSigmas) {
   std::deque<io::GnssFix> fixes;
   for (int i = 0; i < 5; ++i) fixes.push_back({i * kSecond, Vec3d(100.0 + i, 50.0, 10.0), 1.5, 3.0});
@@ -269,6 +446,44 @@ TEST(MapLocaliser, TheGnssPriorIsTheMedianOfTheWindowWithARadiusFromItsSigmas) {
   EXPECT_NEAR(prior->centre_m.x(), 103.0, 1e-9);  // median of 100, 101, 132, 103, 104
   EXPECT_NEAR(prior->radius_m, 3.0 * 3.0 + 0.4 + 2.0, 1e-12);
   EXPECT_FALSE(gnss_prior(fixes, 20 * kSecond, 4.0, 0.4, o).has_value());  // none in the window
+}
+
+// After a restart from a placed pose: the new run lies within the radius plus the lost motion
+// plus its path of where the last run ended, whatever its unknown heading. Checked on random
+// walks: the true position is always inside the region.
+TEST(MapLocaliser, TheRestartPriorHoldsTheNewRunWhateverItsHeading) {
+  LocalisationOptions o;
+  o.restart_radius_m = 0.5;
+  const RunEnd end{Vec3d(3.0, -2.0, 1.0), 1.2, 10 * kSecond};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    // Lost motion over the 0.3 s gap at no more than the speed, then a walk of 20 steps.
+    Vec3d p = end.p_m + Vec3d(u(rng), u(rng), u(rng)).normalized() * 1.2 * 0.3 * std::abs(u(rng));
+    double path = 0.0;
+    for (int k = 0; k < 20; ++k) {
+      const Vec3d step = Vec3d(u(rng), u(rng), 0.2 * u(rng)) * 0.1;
+      p += step;
+      path += step.norm();
+      const auto prior = restart_prior(end, 10 * kSecond + 300 * kMillisecond, path, o);
+      ASSERT_TRUE(prior.has_value());
+      EXPECT_EQ(prior->centre_m, end.p_m);
+      EXPECT_LE((p - prior->centre_m).norm(), prior->radius_m);
+    }
+  }
+  EXPECT_NEAR(restart_prior(end, 12 * kSecond, 1.0, o)->radius_m, 0.5 + 1.2 * 2.0 + 1.0, 1e-12);
+  o.restart_radius_m = 0.0;  // off
+  EXPECT_FALSE(restart_prior(end, 12 * kSecond, 1.0, o).has_value());
+}
+
+TEST(MapLocaliser, TheTighterPriorIsTheSmallerOne) {
+  const localisation::PriorRegion small{Vec3d(1.0, 0.0, 0.0), 2.0};
+  const localisation::PriorRegion large{Vec3d(0.0, 5.0, 0.0), 20.0};
+  EXPECT_EQ(tighter(small, large)->centre_m, small.centre_m);
+  EXPECT_EQ(tighter(large, small)->centre_m, small.centre_m);
+  EXPECT_EQ(tighter(std::nullopt, large)->radius_m, 20.0);
+  EXPECT_EQ(tighter(small, std::nullopt)->radius_m, 2.0);
+  EXPECT_FALSE(tighter(std::nullopt, std::nullopt).has_value());
 }
 
 }  // namespace

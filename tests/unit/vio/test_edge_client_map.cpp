@@ -253,6 +253,38 @@ TEST(EdgeClientMap, WithoutGroundTruthTheCloudPlacesTheClientInItsMap) {
       0.05);
 }
 
+// A filter restart mid-run (the IMU missing for 0.2 s, after the first lock): the new filter run
+// starts in a new odometry frame and the cloud places it again, searching near where the first
+// run ended; every pose ends in the map frame, near the truth.
+TEST(EdgeClientMap, AfterARestartTheCloudPlacesTheClientAgain) {
+  ASSERT_FALSE(clip().map.empty());
+  const mrvs::test::TempDir dir;
+  const fs::path sequence = clip_without_groundtruth(dir.path());
+  auto server = start_server(dir / "server.log");
+  const auto run = mrvs::test::run_tool(
+      MRVS_EDGE_CLIENT, "--dataset " + quoted(sequence) + " --config " +
+                            quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") + " --output " +
+                            quoted(dir / "traj.txt") + " --threads 1 --dds-profile " + quoted(profile()) +
+                            " --dds-domain " + std::to_string(kDomain) +
+                            " --map-wait 20 --realtime --imu-outage 16 0.2 --log-level info --progress 0");
+  server->stop();
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(value_of(run.output, "FILTER_RUNS"), 2.0) << run.output;
+  EXPECT_EQ(value_of(run.output, "LOCALISED_RUNS"), 2.0) << run.output;
+  // The second run is searched near where the first, placed one ended, not anywhere.
+  EXPECT_NE(run.output.find("of where the last run ended"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("TRAJECTORY_FRAME: map"), std::string::npos) << run.output;
+  EXPECT_EQ(value_of(run.output, "POSES_NEVER_IN_MAP_FRAME"), 0.0) << run.output;
+  const std::string per_run = "LOCALISED_AFTER_S_PER_RUN: ";
+  const std::size_t at = run.output.find(per_run);
+  if (at != std::string::npos)
+    RecordProperty("localised_after_s_per_run",
+                   run.output.substr(at + per_run.size(), run.output.find('\n', at) - at - per_run.size()));
+  const double ate = ate_raw(dir / "traj.txt");
+  RecordProperty("ate_m", std::to_string(ate));
+  EXPECT_LT(ate, 0.05) << run.output;
+}
+
 // A cloud that never answers: the client says so, runs plain VIO to the end and writes every
 // pose in its odometry frame.
 TEST(EdgeClientMap, ADeadCloudEndsAsPlainVio) {

@@ -91,4 +91,43 @@ Eigen::MatrixXd gauge_directions(const State& state, const Vec3d& pivot);
 /// covariance.
 Status reanchor_state(State& state, const SE3d& T_m_o, const Mat6d& covariance, const Vec3d& anchor_m);
 
+/// The covariance of [position; yaw] at the map point x_m (4 x 4) of an answer whose
+/// `covariance` is that of [rho; phi] about `anchor_m` (mrvs/localisation/types.h): rho and
+/// phi_z, the yaw's lever arm moved from the anchor to x_m.
+Eigen::Matrix4d position_yaw_covariance(const Mat6d& covariance, const Vec3d& anchor_m, const Vec3d& x_m);
+
+/// 99 % quantile of chi-square with 4 degrees of freedom (a position and a heading).
+constexpr double kChi2Pose4 = 13.277;
+
+/// What apply_pose_fix() did.
+struct PoseFix {
+  Eigen::Vector4d residual = Eigen::Vector4d::Zero();  ///< the answer's [position (m); yaw (rad)] at the IMU
+  Eigen::Vector4d correction = Eigen::Vector4d::Zero();  ///< what the state moved by (applied only)
+  double mahalanobis2 = 0.0;  ///< of the residual against the filter's (floored) and the answer's covariance
+  bool applied = false;       ///< false: beyond the gate, the state is unchanged
+};
+
+/// A localisation answer once the state is already in the map frame (design/localisation.md,
+/// "optionally at a low rate as a pose update"): T_fix (its yaw and translation; roll and
+/// pitch dropped) takes the state's frame to where the cloud places it, so the IMU's true
+/// position is T_fix * p and its heading yaw(T_fix) more than the estimate (the residual).
+/// The filter's own [position; heading] covariance at the IMU, each variance raised to at
+/// least `floor_sigma`^2 ([m x3; rad]; the raise along the gauge directions, where the whole
+/// state may lie off together), and the answer's (`covariance` of [rho; phi] about
+/// `anchor_m`, moved to the IMU) weigh the two: the state's mean moves by the Kalman gain of
+/// that floored covariance (the IMU's position and heading by own (own + answer)^-1 residual,
+/// the clones, points, velocity and gyro bias through their correlations). The covariance is
+/// kept: the filter's stage-1 map updates, cast from its own estimate, confirm its heading and
+/// its position along a surface whether they are right or wrong, so it is overconfident about
+/// where it lies (hence the floor); an EKF update of the covariance with the floor in it left
+/// the filter that much looser for the following map updates, which then turned its heading by
+/// degrees (edge_client/README.md). Not applied when the residual's squared Mahalanobis
+/// distance exceeds `gate_chi2` (the answer disagrees with the filter beyond both
+/// covariances). InvalidArgument for a non-finite or non-symmetric covariance (the state
+/// unchanged).
+StatusOr<PoseFix> apply_pose_fix(State& state, const SE3d& T_fix, const Mat6d& covariance,
+                                 const Vec3d& anchor_m,
+                                 const Eigen::Vector4d& floor_sigma = Eigen::Vector4d::Zero(),
+                                 double gate_chi2 = kChi2Pose4);
+
 }  // namespace mrvs::edge

@@ -12,8 +12,22 @@
 //     refined rivals and could not tell them apart) may stand in for one of those answers when
 //     it agrees with an "ok" one from independent data, before or after it: two submaps put the
 //     same pose first and one of them tells it from every rival;
+//   - the answer used is the agreeing answers combined (fuse(): weighed by their covariances);
 //   - a refused or disagreeing answer makes the next submap longer (up to max_window_s);
 //   - a request unanswered after timeout_s (wall clock) is given up and asked again.
+// Once an answer is accepted and the state is in the map frame, with track_interval_s > 0 it
+// tracks: it gathers a submap of window_s (now in the map frame) and asks again, within
+// track_radius_m (plus the filter's own uncertainty) of where the filter is; each ok answer
+// comes back from step() as a pose fix (apply_pose_fix: the filter's position and heading
+// weighed against the answer's, gated), so the heading the rays cannot observe keeps being
+// corrected. The first fix comes window_s after the lock (it checks it), and the next one
+// track_interval_s after an applied fix, window_s after any other answer.
+// `doubt_after_refusals` ok answers in a row that the filter's gate refuses mean the filter is
+// not where it thinks (a wrong lock in a symmetric room, or a diverged heading): the lock is
+// doubted and the localiser starts over (a search of the whole map, answers_needed agreeing
+// answers), the filter running as plain VIO meanwhile. Until a first fix is applied the lock
+// is on probation: one refusal doubts it. (Two refused fixes that agree with each other do not
+// move the filter: a wrong answer along a wall repeats from one submap to the next.)
 // Timing in the sensor clock (frame times) except the reply timeout (steady clock).
 #include <chrono>
 #include <deque>
@@ -52,6 +66,12 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
   double viewpoint_interval_s = 0.25;  ///< points seen within this share one viewpoint, s
   double gnss_sigmas = 3.0;            ///< prior region: this many GNSS sigmas ...
   double gnss_margin_m = 2.0;          ///< ... plus the antenna lever arm plus this, m
+  double restart_radius_m = 1.0;  ///< after a restart from a placed pose: searched near its end, m (0: off)
+  double track_interval_s = 0.0;  ///< in the map frame: a pose fix asked every this long, s (0: none)
+  double track_radius_m = 1.0;    ///< ... searched within this of the filter (plus 3 sigma), m
+  double fix_floor_m = 0.0;       ///< pose fixes: the filter's position trusted no better than this, m
+  double fix_floor_deg = 0.0;     ///< ... and its heading, deg
+  int doubt_after_refusals = 3;   ///< ok pose fixes in a row the gate refuses: the lock is doubted (0: never)
 
   template <class V>
   void visit(V& v) {
@@ -80,6 +100,21 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
       "points seen within this share one viewpoint (<= 64 per request), s");
     v("gnss_sigmas", gnss_sigmas, in_range(0.0, 100.0), "prior radius in GNSS sigmas");
     v("gnss_margin_m", gnss_margin_m, in_range(0.0, 10000.0), "prior radius margin, m");
+    v("restart_radius_m", restart_radius_m, in_range(0.0, 10000.0),
+      "after a filter restart from a pose placed in the map: the new run is searched within this of where "
+      "the "
+      "last one ended, plus its speed times the gap, plus the path since, m (0: anywhere)");
+    v("track_interval_s", track_interval_s, in_range(0.0, 3600.0),
+      "once in the map frame: a localisation request every this long, its answer a pose fix, s (0: none)");
+    v("track_radius_m", track_radius_m, in_range(0.01, 10000.0),
+      "pose fixes: searched within this of the filter's position (plus 3 sigma), m");
+    v("fix_floor_m", fix_floor_m, in_range(0.0, 100.0),
+      "pose fixes: the filter's own position is trusted no better than this (sigma), m");
+    v("fix_floor_deg", fix_floor_deg, in_range(0.0, 180.0),
+      "pose fixes: the filter's own heading is trusted no better than this (sigma), deg");
+    v("doubt_after_refusals", doubt_after_refusals, in_range(0, 1000),
+      "ok pose fixes in a row the filter's gate refuses before the lock is doubted and searched again (0: "
+      "never)");
   }
 };
 
@@ -91,6 +126,24 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
 std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix>& fixes, TimestampNs t_ns,
                                                     double window_s, double lever_arm_m,
                                                     const LocalisationOptions& options);
+
+/// Where the previous filter run ended, placed in the map (map frame), and how fast it moved.
+struct RunEnd {
+  Vec3d p_m = Vec3d::Zero();
+  double speed_mps = 0.0;
+  TimestampNs t_ns = 0;
+};
+
+/// The prior region of a run that began at start_ns after a filter restart from `end`: centred
+/// where the last run ended, the radius restart_radius_m plus the speed times the gap (the motion
+/// the restart lost) plus path_m, the new run's path length since (its heading in the map is not
+/// known, so any direction). nullopt when restart_radius_m is 0.
+std::optional<localisation::PriorRegion> restart_prior(const RunEnd& end, TimestampNs start_ns, double path_m,
+                                                       const LocalisationOptions& options);
+
+/// The smaller of two prior regions (either may be missing).
+std::optional<localisation::PriorRegion> tighter(const std::optional<localisation::PriorRegion>& a,
+                                                 const std::optional<localisation::PriorRegion>& b);
 
 /// An accepted answer: the odometry frame in the map.
 struct Alignment {
@@ -113,8 +166,11 @@ struct LocalisationFrameStats {
   double rtt_ms = 0.0;    ///< of the reply taken this frame
   double cloud_ms = 0.0;  ///< the cloud's registration time of that reply
   int timeouts = 0;
-  std::string reply;  ///< "<status>: <detail>" of the reply taken, if any
-  bool accepted = false;
+  std::string reply;      ///< "<status>: <detail>" of the reply taken, if any
+  bool accepted = false;  ///< the answer that placed the filter in the map frame
+  int fixes_applied = 0;  ///< tracking: answers applied as pose fixes
+  int fixes_refused = 0;  ///< tracking: ok answers the filter's gate refused
+  bool doubted = false;   ///< the lock was doubted this frame (doubt_after_refusals): searching again
 };
 
 class MapLocaliser {
@@ -130,11 +186,27 @@ class MapLocaliser {
   /// A feature's latest position estimate (odometry frame) at t_ns, seen from `viewpoint_o`;
   /// replaces its earlier one.
   void set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o, const Vec3d& viewpoint_o);
-  /// Whether a dense stereo pair at t_ns is wanted (dense_stereo source, dense_interval_s).
+  /// Whether a dense stereo pair at t_ns is wanted (dense_stereo source, dense_interval_s,
+  /// and gathering()).
   bool wants_dense(TimestampNs t_ns) const;
+  /// Whether points seen at t_ns are wanted: always until the lock; when tracking, in the
+  /// window_s before the next request.
+  bool gathering(TimestampNs t_ns) const;
+  /// After the accepted answer at t_ns placed the state in the map frame: forget the
+  /// acquisition and track (pose fixes every track_interval_s; nothing when it is 0).
+  void start_tracking(TimestampNs t_ns);
+  /// Whether step() still has work: before the lock, or tracking with track_interval_s > 0.
+  bool active() const { return !tracking_ || options_.track_interval_s > 0.0; }
+  bool tracking() const { return tracking_; }
+  /// Tracking: whether the filter applied the pose fix step() returned. True when the lock is
+  /// doubted: after doubt_after_refusals refusals in a row, or one before any fix was applied
+  /// since the lock (probation); the localiser is then reset (it searches the whole map again;
+  /// the caller leaves the map frame). 0 doubt_after_refusals: never.
+  bool note_fix(bool applied);
 
   /// One frame: takes replies, decides, maybe sends the next request (anchored at the IMU
-  /// position anchor_o at t_ns, with the prior region if any). The accepted alignment, once.
+  /// position anchor_o at t_ns, with the prior region if any). The accepted alignment, once;
+  /// when tracking, each ok answer (a pose fix, in the map frame).
   std::optional<Alignment> step(TimestampNs t_ns, const Vec3d& anchor_o,
                                 const std::optional<localisation::PriorRegion>& prior, MapService& service,
                                 LocalisationFrameStats* stats);
@@ -156,11 +228,17 @@ class MapLocaliser {
     Clock::time_point sent;
   };
   std::optional<Alignment> handle(const LocalisationReply& reply, LocalisationFrameStats* stats);
+  /// Tracking: an ok, unambiguous answer is a pose fix.
+  std::optional<Alignment> handle_fix(const LocalisationReply& reply, const Pending& p);
   /// An ambiguous answer with a best guess: the ok candidate it confirms, if any (else kept).
   std::optional<Alignment> take_guess(const Alignment& guess);
   /// A guess from independent data that agrees with `a`, if any.
   const Alignment* confirming_guess(const Alignment& a) const;
   std::optional<Alignment> accept(const Alignment& a, const std::string& how, LocalisationFrameStats* stats);
+  /// The agreeing answers as one: their placements of the newest anchor (position and yaw)
+  /// weighed by their covariances (older ones' widened by the agreement floors), and the
+  /// combined covariance; the newest answer as it is when a covariance is singular.
+  Alignment fuse(std::vector<Alignment> agreeing) const;
   bool agree(const Alignment& earlier, const Alignment& later) const;
   /// Their submaps share at most max_overlap of the shorter one's time span.
   bool independent(const Alignment& a, const Alignment& b) const;
@@ -184,6 +262,10 @@ class MapLocaliser {
   std::uint64_t next_seq_ = 1;
   int requests_ = 0;
   std::string status_ = "not started";
+  bool tracking_ = false;  ///< placed in the map frame: answers are pose fixes
+  int refused_in_a_row_ = 0;
+  bool confirmed_ = false;        ///< a pose fix has been applied since the lock (else: on probation)
+  TimestampNs last_sent_ns_ = 0;  ///< anchor time of the last request sent
 };
 
 }  // namespace mrvs::edge

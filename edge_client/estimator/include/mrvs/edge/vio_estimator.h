@@ -160,6 +160,17 @@ class VioEstimator {
   /// Feeds the submap with this frame's points, runs the localiser, applies its answer.
   void localise(const FeatureFrame& frame, const std::vector<std::pair<FeatureId, Vec3d>>& triangulated,
                 FrameOutput* out);
+  /// Before a lock: where the submap is searched (the tighter of the GNSS prior and, after a
+  /// restart from a placed pose, restart_prior), nullopt for anywhere in the map.
+  std::optional<localisation::PriorRegion> search_prior() const;
+  /// Tracking: where the pose fix's submap is searched (the filter's position, the radius
+  /// track_radius_m plus 3 sigma of it).
+  localisation::PriorRegion tracking_prior() const;
+  /// Tracking: a pose fix from the cloud into the state, if the gate lets it.
+  void apply_fix(const Alignment& a, LocalisationFrameStats* stats);
+  /// Moves the state (and the newest clone's first estimate) into the map frame by `a`; the
+  /// registered-point grid and the surfaces start over. False (logged) when it cannot.
+  bool move_to(const Alignment& a);
 
   EstimatorOptions options_;
   config::StereoRigCalibration rig_;
@@ -185,6 +196,11 @@ class VioEstimator {
   std::optional<State> state_;
   /// The last IMU pose of the previous filter run: a restart's odometry frame continues from it.
   std::optional<SE3d> last_pose_;
+  /// Where the previous run ended when it was placed in the map (restart_prior's centre), the
+  /// path length of this run since it began, and its last position (path accounting).
+  std::optional<RunEnd> last_placed_;
+  double run_path_m_ = 0.0;
+  Vec3d run_last_p_ = Vec3d::Zero();
   ImuState imu_fej_;  ///< first estimate of the IMU at the newest clone (before its update)
   FeatureDatabase db_;
   std::deque<io::ImuSample> imu_;
