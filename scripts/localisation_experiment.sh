@@ -115,7 +115,7 @@ rev = ex.get("revision", "unknown")
 seed, per, duration, offset = (ex.get(k, v) for k, v in
                                (("seed", seed), ("per_trajectory", per), ("duration", duration), ("offset", offset)))
 rows, within, wrong, errs, degs, times, cloud, up, down, n = [], 0, 0, [], [], [], [], [], [], 0
-fix_ms, fixes, refused = [], 0, 0
+fix_ms, fixes, refused, doubted = [], 0, 0, 0
 def numbers(path):
     return [float(x) for x in open(path).read().split()] if os.path.isfile(path) else []
 for run in sorted(glob.glob(os.path.join(out, "runs", "*"))):
@@ -125,6 +125,8 @@ for run in sorted(glob.glob(os.path.join(out, "runs", "*"))):
     fix_ms += numbers(os.path.join(run, "fix_ms.txt"))
     fixes += int(e.get("LOCALISATION_FIXES", "0"))
     refused += int(e.get("LOCALISATION_FIXES_REFUSED", "0"))
+    doubts = int(e.get("LOCKS_DOUBTED", "0"))
+    doubted += doubts
     if float(e.get("LOCALISATION_REQUEST_BYTES", "0")) > 0:
         up.append(float(e["LOCALISATION_REQUEST_BYTES"])); down.append(float(e["LOCALISATION_REPLY_BYTES"]))
     loc = float(e.get("LOCALISED", "0")) >= 1 and a
@@ -136,7 +138,8 @@ for run in sorted(glob.glob(os.path.join(out, "runs", "*"))):
         errs.append(em); degs.append(ed); times.append(after)
         within += after <= 5.0
     rows.append(f"| {os.path.basename(run)} | {e.get('LOCALISATION_REQUESTS', 'n/a')} | "
-                + (f"{after:.2f} | {100 * em:.1f} | {ed:.2f} | {'WRONG LOCK' if bad else 'ok'} |" if loc else "- | - | - | not localised |"))
+                + (f"{after:.2f} | {100 * em:.1f} | {ed:.2f} | {'WRONG LOCK' if bad else 'ok'} |" if loc else "- | - | - | not localised |")
+                + f" {doubts} |")
 q = lambda v, p: sorted(v)[min(len(v) - 1, int(p * len(v)))] if v else float("nan")
 with open(os.path.join(out, "REPORT.md"), "w") as f:
     f.write(f"# Map-based localisation from {n} start instants\n\n")
@@ -157,10 +160,10 @@ with open(os.path.join(out, "REPORT.md"), "w") as f:
     if fix_ms:
         f.write(f"- pose fixes once localised ({len(fix_ms)} requests with a prior region around the filter): registration "
                 f"median {st.median(fix_ms):.0f} ms, p95 {q(fix_ms, 0.95):.0f} ms; applied {fixes}, refused by the edge's "
-                f"gate {refused}\n")
+                f"gate {refused}; locks doubted (searched again) {doubted}\n")
     if up:
         f.write(f"- payload per request / reply: {st.mean(up):.0f} B / {st.mean(down):.0f} B (CDR, mean over runs)\n")
-    f.write("\n| clip | requests | localised after s | alignment cm | alignment deg | |\n|---|---|---|---|---|---|\n")
+    f.write("\n| clip | requests | localised after s | alignment cm | alignment deg | | locks doubted |\n|---|---|---|---|---|---|---|\n")
     f.write("\n".join(rows) + "\n")
 print(open(os.path.join(out, "REPORT.md")).read())
 PY

@@ -155,7 +155,42 @@ def localisation_table(runs):
              "before the answer mapped by it) against the paper's start (with map, gt_noisy).\n\n")
     text += table(["sequence", "localised", "after s", "alignment cm", "alignment deg", "ATE map start",
                    "ATE paper start", "ratio"], rows)
-    return text
+    return text + localisation_runs_table(runs)
+
+
+def count(keys, key):
+    return str(int(float(keys[key]))) if key in keys else "n/a"
+
+
+def localisation_runs_table(runs):
+    """Per seed: the map-based start against the paper's start of the same seed, with the locks
+    (a doubted lock is searched again: more than one lock per run), the pose fixes applied and
+    refused, and how many runs stay within 1.1 x the paper's start."""
+    rows, within, total = [], 0, 0
+    for seq, variants in runs.items():
+        paper = {r["seed"]: r for r in variants.get("map", [])}
+        for r in variants.get("map_start", []):
+            e, a = r["edge"], r["alignment"]
+            start = float(need(r["eval"], "ATE_RMSE_m", r["eval_path"]))
+            p = paper.get(r["seed"])
+            gt = float(need(p["eval"], "ATE_RMSE_m", p["eval_path"])) if p else None
+            total += gt is not None
+            within += gt is not None and start <= 1.1 * gt
+            rows.append([seq, r["seed"], e.get("LOCALISED_AFTER_S", "n/a") if float(e.get("LOCALISED", "0")) >= 1
+                         else "not localised",
+                         cm(float(a["POSE_ERROR_AT_M"])) if a else "n/a",
+                         f"{float(a['POSE_ERROR_AT_DEG']):.2f}" if a else "n/a",
+                         count(e, "LOCALISED"), count(e, "LOCKS_DOUBTED"),
+                         f"{count(e, 'LOCALISATION_FIXES')} / {count(e, 'LOCALISATION_FIXES_REFUSED')}",
+                         cm(start), cm(gt) if gt is not None else "n/a",
+                         ratio(start, gt) if gt else "n/a"])
+    if not rows:
+        return ""
+    text = ("\nPer run (alignment: the error at the first lock; locks: accepted answers, a doubted lock is searched "
+            f"again; fixes: pose fixes applied / refused by the edge's gate). Within 1.1 x the paper's start: "
+            f"**{within}/{total}**.\n\n")
+    return text + table(["sequence", "seed", "localised after s", "alignment cm", "alignment deg", "locks",
+                         "doubted", "fixes", "ATE map start", "ATE paper start", "ratio"], rows)
 
 
 TIMING = [("A_IMAGE", "(a) image processing"), ("B_TRACKING", "(b) extraction + tracking"),

@@ -38,6 +38,15 @@ for seq in ("SeqA", "SeqB"):
         w(os.path.join(d, "edge.txt"), edge)
         with open(os.path.join(d, "command.txt"), "w") as f:
             f.write(f"edge_client {seq} {variant} seed{seed}\n")
+    d = os.path.join(root, "runs", seq, "seed1", "map_start")  # the map-based start
+    w(os.path.join(d, "eval.txt"), {"ATE_RMSE_m": round(rng.uniform(0.01, 0.2), 4)})
+    w(os.path.join(d, "edge.txt"), {"LOCALISED": rng.randint(1, 3), "LOCALISED_AFTER_S": round(rng.uniform(1, 9), 2),
+                                    "LOCKS_DOUBTED": rng.randint(0, 2), "LOCALISATION_FIXES": rng.randint(0, 30),
+                                    "LOCALISATION_FIXES_REFUSED": rng.randint(0, 9)})
+    w(os.path.join(d, "alignment.txt"), {"POSE_ERROR_AT_M": round(rng.uniform(0.0, 0.1), 4),
+                                         "POSE_ERROR_AT_DEG": round(rng.uniform(0.0, 2.0), 3)})
+    with open(os.path.join(d, "command.txt"), "w") as f:
+        f.write(f"edge_client {seq} map_start seed{seed}\n")
 PY
 }
 
@@ -66,6 +75,15 @@ if f"{t:.2f}" not in text.split("Table VI")[1].split("## The link")[0]:
 rays = val("map", "RAYS_PER_FRAME", "edge.txt")
 if f"| {seq} | {rays:.1f} |" not in text:
     sys.exit(f"link table row of {seq} missing")
+try:
+    ms = val("map_start", "ATE_RMSE_m")
+except SystemExit:
+    sys.exit(0)  # a real run without the map-based start
+locks = int(val("map_start", "LOCALISED", "edge.txt"))
+doubted = int(val("map_start", "LOCKS_DOUBTED", "edge.txt"))
+row = [l for l in text.splitlines() if l.startswith(f"| {seq} | seed1 |")]
+if not row or f"| {locks} | {doubted} |" not in row[0] or not row[0].endswith(f"| {100 * ms:.2f} | {100 * m:.2f} | {ms / m:.2f} |"):
+    sys.exit(f"per-run map-start row of {seq} missing (locks {locks}, doubted {doubted}, ATE {ms} vs {m})")
 PY
 }
 
