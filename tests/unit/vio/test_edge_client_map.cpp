@@ -71,15 +71,17 @@ std::unique_ptr<mrvs::test::BackgroundTool> start_server(const fs::path& log) {
       log);
 }
 
-std::string client_args(const fs::path& out, const std::string& extra) {
-  return "--dataset " + quoted(clip().sequence) + " --config " +
+/// edge_client's arguments on `sequence` (default: the clip) with the test's DDS profile and domain.
+std::string client_args(const fs::path& out, const std::string& extra, const fs::path& sequence = {}) {
+  return "--dataset " + quoted(sequence.empty() ? clip().sequence : sequence) + " --config " +
          quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") + " --output " + quoted(out) +
          " --threads 1 --dds-profile " + quoted(profile()) + " --dds-domain " + std::to_string(kDomain) +
          " " + extra;
 }
 
-mrvs::test::RunResult edge_client(const fs::path& out, const std::string& extra) {
-  return mrvs::test::run_tool(MRVS_EDGE_CLIENT, client_args(out, extra));
+mrvs::test::RunResult edge_client(const fs::path& out, const std::string& extra,
+                                  const fs::path& sequence = {}) {
+  return mrvs::test::run_tool(MRVS_EDGE_CLIENT, client_args(out, extra, sequence));
 }
 
 std::string read_text(const fs::path& p) {
@@ -221,20 +223,23 @@ double ate_raw_from(const fs::path& estimate, TimestampNs from_ns) {
   return ate_raw(part);
 }
 
+/// The clip without its ground-truth folder against a running cloud_server, in real time, from
+/// the map (the product's default): edge_client's run, its trajectory in dir/traj.txt.
+mrvs::test::RunResult run_from_the_map(const fs::path& dir, const std::string& extra) {
+  const fs::path sequence = clip_without_groundtruth(dir);
+  auto server = start_server(dir / "server.log");
+  auto run = edge_client(dir / "traj.txt", "--map-wait 20 --realtime --log-level info --progress 0 " + extra,
+                         sequence);
+  server->stop();
+  return run;
+}
+
 // The product's default (no ground truth at run time): the client finds itself in the map
 // through the cloud's localisation service and ends in the map frame, near the truth.
 TEST(EdgeClientMap, WithoutGroundTruthTheCloudPlacesTheClientInItsMap) {
   ASSERT_FALSE(clip().map.empty());
   const mrvs::test::TempDir dir;
-  const fs::path sequence = clip_without_groundtruth(dir.path());
-  auto server = start_server(dir / "server.log");
-  const auto run = mrvs::test::run_tool(
-      MRVS_EDGE_CLIENT, "--dataset " + quoted(sequence) + " --config " +
-                            quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") + " --output " +
-                            quoted(dir / "traj.txt") + " --threads 1 --dds-profile " + quoted(profile()) +
-                            " --dds-domain " + std::to_string(kDomain) +
-                            " --map-wait 20 --realtime --log-level info --progress 0");
-  server->stop();
+  const auto run = run_from_the_map(dir.path(), "");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(run.output.find("ground truth read"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("TRAJECTORY_FRAME: map"), std::string::npos) << run.output;
@@ -259,15 +264,7 @@ TEST(EdgeClientMap, WithoutGroundTruthTheCloudPlacesTheClientInItsMap) {
 TEST(EdgeClientMap, AfterARestartTheCloudPlacesTheClientAgain) {
   ASSERT_FALSE(clip().map.empty());
   const mrvs::test::TempDir dir;
-  const fs::path sequence = clip_without_groundtruth(dir.path());
-  auto server = start_server(dir / "server.log");
-  const auto run = mrvs::test::run_tool(
-      MRVS_EDGE_CLIENT, "--dataset " + quoted(sequence) + " --config " +
-                            quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") + " --output " +
-                            quoted(dir / "traj.txt") + " --threads 1 --dds-profile " + quoted(profile()) +
-                            " --dds-domain " + std::to_string(kDomain) +
-                            " --map-wait 20 --realtime --imu-outage 16 0.2 --log-level info --progress 0");
-  server->stop();
+  const auto run = run_from_the_map(dir.path(), "--imu-outage 16 0.2");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(value_of(run.output, "FILTER_RUNS"), 2.0) << run.output;
   EXPECT_EQ(value_of(run.output, "LOCALISED_RUNS"), 2.0) << run.output;
@@ -290,11 +287,7 @@ TEST(EdgeClientMap, AfterARestartTheCloudPlacesTheClientAgain) {
 TEST(EdgeClientMap, ADeadCloudEndsAsPlainVio) {
   const mrvs::test::TempDir dir;
   const fs::path sequence = clip_without_groundtruth(dir.path());
-  const auto run = mrvs::test::run_tool(
-      MRVS_EDGE_CLIENT,
-      "--dataset " + quoted(sequence) + " --config " + quoted(fs::path(MRVS_CONFIG_DIR) / "euroc.yaml") +
-          " --output " + quoted(dir / "traj.txt") + " --threads 1 --dds-profile " + quoted(profile()) +
-          " --dds-domain " + std::to_string(kDomain) + " --map-wait 1 --log-level info --progress 0");
+  const auto run = edge_client(dir / "traj.txt", "--map-wait 1 --log-level info --progress 0", sequence);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("no map from the cloud"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("never placed the filter in its map"), std::string::npos) << run.output;
