@@ -55,8 +55,8 @@ std::optional<localisation::PriorRegion> restart_prior(const RunEnd& end, Timest
                                                        const LocalisationOptions& o) {
   if (o.restart_radius_m <= 0.0) return std::nullopt;
   const double gap_s = std::max(0.0, to_seconds(start_ns - end.t_ns));
-  return localisation::PriorRegion{end.p_m,
-                                   o.restart_radius_m + end.speed_mps * gap_s + std::max(0.0, path_m)};
+  return localisation::PriorRegion{
+      end.p_m, end.carried_m + o.restart_radius_m + end.speed_mps * gap_s + std::max(0.0, path_m)};
 }
 
 std::optional<localisation::PriorRegion> tighter(const std::optional<localisation::PriorRegion>& a,

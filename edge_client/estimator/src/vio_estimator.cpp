@@ -181,9 +181,19 @@ std::optional<std::string> VioEstimator::imu_gap(TimestampNs from_ns, TimestampN
 
 void VioEstimator::restart() {
   if (state_) last_pose_ = SE3d(state_->imu.q_w_b, state_->imu.p_w_b);
-  last_placed_.reset();
-  if (state_ && in_map_frame_ && localises())
-    last_placed_ = RunEnd{state_->imu.p_w_b, state_->imu.v_w_b.norm(), state_->imu.t_ns};
+  if (state_ && in_map_frame_ && localises()) {
+    last_placed_ = RunEnd{state_->imu.p_w_b, state_->imu.v_w_b.norm(), state_->imu.t_ns, 0.0};
+  } else if (state_ && last_placed_) {
+    // A run that began after a placed run and was never placed itself: its end lies within the
+    // region its start had grown to; the next run carries that radius on.
+    const std::optional<localisation::PriorRegion> reached =
+        restart_prior(*last_placed_, init_ns_, run_path_m_, options_.localisation);
+    last_placed_ = reached ? std::optional<RunEnd>(RunEnd{reached->centre_m, state_->imu.v_w_b.norm(),
+                                                          state_->imu.t_ns, reached->radius_m})
+                           : std::nullopt;
+  } else if (state_) {
+    last_placed_.reset();
+  }
   state_.reset();
   in_map_frame_ = false;
   localiser_.reset();

@@ -472,6 +472,12 @@ TEST(MapLocaliser, TheRestartPriorHoldsTheNewRunWhateverItsHeading) {
     }
   }
   EXPECT_NEAR(restart_prior(end, 12 * kSecond, 1.0, o)->radius_m, 0.5 + 1.2 * 2.0 + 1.0, 1e-12);
+  // A run that ended unplaced hands its reached radius on: the next run's region contains it.
+  const auto reached = restart_prior(end, 12 * kSecond, 3.0, o);
+  const RunEnd chained{reached->centre_m, 0.5, 20 * kSecond, reached->radius_m};
+  const auto next = restart_prior(chained, 21 * kSecond, 2.0, o);
+  EXPECT_EQ(next->centre_m, end.p_m);
+  EXPECT_NEAR(next->radius_m, reached->radius_m + 0.5 + 0.5 * 1.0 + 2.0, 1e-12);
   o.restart_radius_m = 0.0;  // off
   EXPECT_FALSE(restart_prior(end, 12 * kSecond, 1.0, o).has_value());
 }

@@ -128,16 +128,19 @@ std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix
                                                     const LocalisationOptions& options);
 
 /// Where the previous filter run ended, placed in the map (map frame), and how fast it moved.
+/// A run that ended unplaced after such a restart hands on its own start's region: the centre
+/// stays, the radius it had reached is carried (carried_m).
 struct RunEnd {
   Vec3d p_m = Vec3d::Zero();
   double speed_mps = 0.0;
   TimestampNs t_ns = 0;
+  double carried_m = 0.0;
 };
 
 /// The prior region of a run that began at start_ns after a filter restart from `end`: centred
 /// where the last run ended, the radius restart_radius_m plus the speed times the gap (the motion
 /// the restart lost) plus path_m, the new run's path length since (its heading in the map is not
-/// known, so any direction). nullopt when restart_radius_m is 0.
+/// known, so any direction), plus end.carried_m. nullopt when restart_radius_m is 0.
 std::optional<localisation::PriorRegion> restart_prior(const RunEnd& end, TimestampNs start_ns, double path_m,
                                                        const LocalisationOptions& options);
 
