@@ -34,21 +34,66 @@ Eigen::Matrix4d covariance_at(const Alignment& a, const Vec3d& x_m) {
 
 }  // namespace
 
-std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix>& fixes, TimestampNs t_ns,
-                                                    double window_s, double lever_arm_m,
+namespace {
+
+/// The track's position at t_ns (linear between samples); nullopt outside its span (a few
+/// milliseconds of slack at the ends: a fix stamped just after the newest frame).
+std::optional<Vec3d> track_at(const std::deque<OdometrySample>& track, TimestampNs t_ns) {
+  const DurationNs kSlack = from_seconds(0.05);
+  if (track.empty() || t_ns < track.front().t_ns - kSlack || t_ns > track.back().t_ns + kSlack)
+    return std::nullopt;
+  auto after = std::lower_bound(track.begin(), track.end(), t_ns,
+                                [](const OdometrySample& s, TimestampNs t) { return s.t_ns < t; });
+  if (after == track.begin()) return track.front().p_o;
+  if (after == track.end()) return track.back().p_o;
+  const OdometrySample& before = *std::prev(after);
+  const double u = after->t_ns == before.t_ns
+                       ? 1.0
+                       : static_cast<double>(t_ns - before.t_ns) / static_cast<double>(after->t_ns - before.t_ns);
+  return before.p_o + u * (after->p_o - before.p_o);
+}
+
+/// One fix's bound on the anchor: its position, the radius, and the body's odometry position then.
+struct FixSphere {
+  Vec3d g;
+  double radius_m;
+  Vec3d o;
+};
+
+}  // namespace
+
+std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix>& fixes,
+                                                    const std::deque<OdometrySample>& track, TimestampNs t_ns,
+                                                    const Vec3d& anchor_o, double window_s, double lever_arm_m,
                                                     const LocalisationOptions& o) {
-  std::array<std::vector<double>, 3> axes;
-  double sigma = 0.0;
+  std::vector<FixSphere> spheres;
   for (const io::GnssFix& f : fixes) {
     if (f.t_ns > t_ns || f.t_ns < t_ns - from_seconds(window_s)) continue;
-    for (int k = 0; k < 3; ++k) axes[static_cast<std::size_t>(k)].push_back(f.p_map[k]);
-    sigma = std::max({sigma, f.sigma_horizontal_m, f.sigma_vertical_m});
+    const std::optional<Vec3d> o_f = track_at(track, f.t_ns);
+    if (!o_f) continue;
+    const double bound = o.gnss_sigmas * std::max(f.sigma_horizontal_m, f.sigma_vertical_m) + lever_arm_m;
+    spheres.push_back({f.p_map, bound, *o_f});
   }
-  if (axes[0].empty()) return std::nullopt;
-  localisation::PriorRegion prior;
-  for (int k = 0; k < 3; ++k) prior.centre_m[k] = quantile(axes[static_cast<std::size_t>(k)], 0.5);
-  prior.radius_m = o.gnss_sigmas * sigma + lever_arm_m + o.gnss_margin_m;
-  return prior;
+  if (spheres.empty()) return std::nullopt;
+  // Two fixes agree when the body positions they allow can be as far apart as the track says.
+  const auto agree = [](const FixSphere& a, const FixSphere& b) {
+    return (a.g - b.g).norm() <= a.radius_m + b.radius_m + (a.o - b.o).norm();
+  };
+  std::optional<localisation::PriorRegion> best;
+  for (const FixSphere& a : spheres) {
+    std::size_t agreeing = 0;
+    for (const FixSphere& b : spheres) agreeing += (&a != &b && agree(a, b)) ? 1 : 0;
+    if (2 * agreeing < spheres.size() - 1) continue;  // contradicts most of the others
+    best = tighter(best, localisation::PriorRegion{a.g, a.radius_m + (anchor_o - a.o).norm() + o.gnss_margin_m});
+  }
+  if (best) return best;
+  // No majority (two fixes that contradict each other): a sphere around all of them.
+  Vec3d centre = Vec3d::Zero();
+  for (const FixSphere& a : spheres) centre += a.g / static_cast<double>(spheres.size());
+  double radius = 0.0;
+  for (const FixSphere& a : spheres)
+    radius = std::max(radius, (a.g - centre).norm() + a.radius_m + (anchor_o - a.o).norm());
+  return localisation::PriorRegion{centre, radius + o.gnss_margin_m};
 }
 
 std::optional<localisation::PriorRegion> restart_prior(const RunEnd& end, TimestampNs start_ns, double path_m,

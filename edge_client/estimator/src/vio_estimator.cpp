@@ -143,6 +143,7 @@ Status VioEstimator::start(const InitializationResult& init, const FeatureFrame&
   localiser_.reset();
   run_path_m_ = 0.0;
   run_last_p_ = state.imu.p_w_b;
+  odometry_.clear();
   // The body rate at the start (for the clone's time-offset Jacobian).
   const auto rates = propagate(state.imu, imu_vector(), state.imu.t_ns, g_w_, noise_);
   last_w_b_ = rates.ok() ? rates->last_rates.w : Vec3d::Zero();
@@ -363,6 +364,9 @@ void VioEstimator::localise(const FeatureFrame& frame,
   }
   run_path_m_ += (s.imu.p_w_b - run_last_p_).norm();
   run_last_p_ = s.imu.p_w_b;
+  odometry_.push_back({s.imu.t_ns, s.imu.p_w_b});
+  while (odometry_.front().t_ns < s.imu.t_ns - from_seconds(options_.localisation.max_window_s + 1.0))
+    odometry_.pop_front();
   const std::optional<localisation::PriorRegion> prior = in_map_frame_ ? tracking_prior() : search_prior();
   const std::optional<Alignment> a =
       localiser_.step(frame.t_ns, s.imu.p_w_b, prior, *map_, &out->localisation);
@@ -389,6 +393,8 @@ bool VioEstimator::move_to(const Alignment& a) {
   imu_fej_.q_w_b = (T.quaternion() * imu_fej_.q_w_b).normalized();
   imu_fej_.p_w_b = T * imu_fej_.p_w_b;
   imu_fej_.v_w_b = T.rotation_matrix() * imu_fej_.v_w_b;
+  for (OdometrySample& o : odometry_) o.p_o = T * o.p_o;
+  run_last_p_ = T * run_last_p_;
   registered_ = RegisteredMap(options_.map.registered_voxel_m, options_.map.registered_per_voxel);
   surfaces_ = SurfaceMap(options_.map.plane_radius_m, kSurfacePointsPerCell);
   return true;
@@ -397,7 +403,7 @@ bool VioEstimator::move_to(const Alignment& a) {
 std::optional<localisation::PriorRegion> VioEstimator::search_prior() const {
   const LocalisationOptions& o = options_.localisation;
   std::optional<localisation::PriorRegion> prior =
-      gnss_prior(gnss_, state_->imu.t_ns, o.window_s, gnss_lever_arm_m_, o);
+      gnss_prior(gnss_, odometry_, state_->imu.t_ns, state_->imu.p_w_b, o.max_window_s, gnss_lever_arm_m_, o);
   if (last_placed_) prior = tighter(prior, restart_prior(*last_placed_, init_ns_, run_path_m_, o));
   return prior;
 }

@@ -434,18 +434,76 @@ TEST(MapLocaliser, PoseFixesRefusedInARowDoubtTheLockAndItSearchesAgain) {
   EXPECT_TRUE(trusting.tracking());
 }
 
-TEST(MapLocaliser, TheGnssPriorIsTheMedianOfTheWindowWithARadiusFromItsSigmas) {
-  std::deque<io::GnssFix> fixes;
-  for (int i = 0; i < 5; ++i) fixes.push_back({i * kSecond, Vec3d(100.0 + i, 50.0, 10.0), 1.5, 3.0});
-  fixes[2].p_map.x() += 30.0;  // a multipath outlier
+/// A car driving at `speed` along a turning path for 8 s; the odometry frame is the map frame
+/// turned by `yaw` and moved (its heading in the map unknown to the edge). Returns the map-frame
+/// body positions every 0.1 s and the odometry track of the same instants.
+std::pair<std::vector<Vec3d>, std::deque<OdometrySample>> drive(double speed, double turn_rate, double yaw,
+                                                                const Vec3d& offset) {
+  std::vector<Vec3d> p_m;
+  std::deque<OdometrySample> track;
+  const SE3d T_o_m(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Vec3d::UnitZ())), offset);
+  Vec3d p(500.0, -200.0, 3.0);
+  double heading = 0.3;
+  for (int k = 0; k <= 80; ++k) {
+    p_m.push_back(p);
+    track.push_back({k * 100 * kMillisecond, T_o_m * p});
+    p += 0.1 * speed * Vec3d(std::cos(heading), std::sin(heading), 0.0);
+    heading += 0.1 * turn_rate;
+  }
+  return {p_m, track};
+}
+
+/// Each fix bounds where the body is now by its error bound plus the distance driven since (the
+/// odometry frame keeps distances whatever its heading): checked on random drives with errors
+/// up to the bound, the true anchor is always inside the prior, and the prior is the newest
+/// fix's sphere (the smallest).
+TEST(MapLocaliser, TheGnssPriorHoldsTheMovingBodyWhateverTheOdometryHeading) {
   LocalisationOptions o;
   o.gnss_sigmas = 3.0;
   o.gnss_margin_m = 2.0;
-  const auto prior = gnss_prior(fixes, 4 * kSecond, 4.0, 0.4, o);
+  const double lever = 0.4, sh = 1.5, sv = 3.0;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 100; ++trial) {
+    const auto [p_m, track] = drive(12.0 * std::abs(u(rng)), 0.3 * u(rng), M_PI * u(rng),
+                                    Vec3d(100 * u(rng), 100 * u(rng), u(rng)));
+    std::deque<io::GnssFix> fixes;  // 1 Hz, the antenna off by up to the bound in any direction
+    for (int k = 0; k <= 70; k += 10) {
+      const Vec3d err = Vec3d(u(rng), u(rng), u(rng)).normalized() * 3.0 * sv * std::abs(u(rng));
+      fixes.push_back({k * 100 * kMillisecond, p_m[static_cast<std::size_t>(k)] + err, sh, sv});
+    }
+    const TimestampNs now = 78 * 100 * kMillisecond;
+    const auto prior = gnss_prior(fixes, track, now, track[78].p_o, 6.0, lever, o);
+    ASSERT_TRUE(prior.has_value());
+    EXPECT_LE((p_m[78] - prior->centre_m).norm(), prior->radius_m) << trial;
+    EXPECT_EQ(prior->centre_m, fixes.back().p_map) << trial;
+    EXPECT_NEAR(prior->radius_m, 3.0 * sv + lever + (track[78].p_o - track[70].p_o).norm() + 2.0, 1e-9);
+  }
+}
+
+TEST(MapLocaliser, TheGnssPriorDropsAnOutlierAndNeedsAFixTheTrackCovers) {
+  LocalisationOptions o;
+  o.gnss_sigmas = 3.0;
+  o.gnss_margin_m = 2.0;
+  const auto [p_m, track] = drive(10.0, 0.0, 1.0, Vec3d(5.0, 6.0, 0.0));
+  std::deque<io::GnssFix> fixes;
+  for (int k = 0; k <= 70; k += 10) fixes.push_back({k * 100 * kMillisecond, p_m[static_cast<std::size_t>(k)], 1.5, 3.0});
+  fixes.back().p_map.y() += 40.0;  // the newest fix a multipath outlier
+  const TimestampNs now = 78 * 100 * kMillisecond;
+  const auto prior = gnss_prior(fixes, track, now, track[78].p_o, 6.0, 0.4, o);
   ASSERT_TRUE(prior.has_value());
-  EXPECT_NEAR(prior->centre_m.x(), 103.0, 1e-9);  // median of 100, 101, 132, 103, 104
-  EXPECT_NEAR(prior->radius_m, 3.0 * 3.0 + 0.4 + 2.0, 1e-12);
-  EXPECT_FALSE(gnss_prior(fixes, 20 * kSecond, 4.0, 0.4, o).has_value());  // none in the window
+  EXPECT_EQ(prior->centre_m, fixes[6].p_map);  // the newest fix that agrees with the others
+  EXPECT_LE((p_m[78] - prior->centre_m).norm(), prior->radius_m);
+  // Two fixes that contradict each other: a region around both still holds the body.
+  const std::deque<io::GnssFix> two(fixes.end() - 2, fixes.end());
+  const auto both = gnss_prior(two, track, now, track[78].p_o, 6.0, 0.4, o);
+  ASSERT_TRUE(both.has_value());
+  EXPECT_LE((p_m[78] - both->centre_m).norm(), both->radius_m);
+  EXPECT_LE((fixes.back().p_map - both->centre_m).norm(), both->radius_m);
+  // Fixes older than the window, or before the track began (a new run): no prior.
+  EXPECT_FALSE(gnss_prior(fixes, track, 20 * kSecond, track[78].p_o, 6.0, 0.4, o).has_value());
+  const std::deque<OdometrySample> late(track.end() - 5, track.end());
+  EXPECT_FALSE(gnss_prior(fixes, late, now, track[78].p_o, 6.0, 0.4, o).has_value());
 }
 
 // After a restart from a placed pose: the new run lies within the radius plus the lost motion

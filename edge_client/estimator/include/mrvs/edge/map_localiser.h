@@ -118,13 +118,23 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
   }
 };
 
-/// The prior region from GNSS fixes (antenna positions, map frame) around t_ns (IMU clock):
-/// the per-axis median of the fixes within window_s before it (robust to the odd multipath
-/// outlier), and a radius of gnss_sigmas times the larger sigma, plus the antenna's lever arm
-/// (the heading that would turn it is not known yet) and gnss_margin_m. nullopt without a fix
-/// in the window.
-std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix>& fixes, TimestampNs t_ns,
-                                                    double window_s, double lever_arm_m,
+/// The IMU position in the odometry frame at one time: the track gnss_prior reads.
+struct OdometrySample {
+  TimestampNs t_ns = 0;
+  Vec3d p_o = Vec3d::Zero();
+};
+
+/// The prior region from GNSS fixes (antenna positions, map frame) for the body at anchor_o
+/// (odometry frame) at t_ns. A fix at t_f puts the antenna within gnss_sigmas times its larger
+/// sigma, so the body within that plus the lever arm (the heading that would turn it is not
+/// known yet); the body has since moved |anchor_o - p_o(t_f)| (the track interpolated at t_f; the
+/// odometry-to-map transform keeps distances whatever its heading), so each fix of the last
+/// window_s that the track covers bounds the anchor by a sphere. A fix whose sphere cannot meet
+/// those of most others is an outlier (multipath) and dropped; of the rest the smallest sphere
+/// is returned, its radius plus gnss_margin_m. nullopt without such a fix.
+std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix>& fixes,
+                                                    const std::deque<OdometrySample>& track, TimestampNs t_ns,
+                                                    const Vec3d& anchor_o, double window_s, double lever_arm_m,
                                                     const LocalisationOptions& options);
 
 /// Where the previous filter run ended, placed in the map (map frame), and how fast it moved.

@@ -186,6 +186,8 @@ class VioEstimator {
   MapLocaliser localiser_;
   std::deque<io::GnssFix> gnss_;  ///< the last max_window_s of fixes
   double gnss_lever_arm_m_ = 0.0;
+  /// This run's IMU positions (the state's frame), the last max_window_s: the GNSS prior's track.
+  std::deque<OdometrySample> odometry_;
   bool in_map_frame_ = false;  ///< the state is in the map frame (aligned at start or localised)
   RegisteredMap registered_;
   SurfaceMap surfaces_;  ///< every map point the cloud answered (stage1_mode plane's planes)
