@@ -110,8 +110,7 @@ StatusOr<std::vector<Preintegration>> preintegrate_window(const Window& w,
 using StereoPoints = std::unordered_map<FeatureId, Vec3d>;  ///< per feature: the point in cam0
 
 /// The stereo-triangulated points of every window frame.
-std::vector<StereoPoints> stereo_points(const Window& w, const SE3d& T_c0_c1) {
-  const TriangulationOptions tri;
+std::vector<StereoPoints> stereo_points(const Window& w, const SE3d& T_c0_c1, const TriangulationOptions& tri) {
   std::vector<StereoPoints> out(w.frames.size());
   for (std::size_t k = 0; k < w.frames.size(); ++k) {
     for (const FeatureObservation& f : w.frames[k]->features) {
@@ -220,10 +219,10 @@ Vec3d median_translation(const StereoPoints& points_i, const StereoPoints& point
 /// T_b0_bk of every window frame from the chained relative camera poses.
 StatusOr<std::vector<SE3d>> visual_poses(const Window& w, const std::vector<Preintegration>& pre,
                                          const config::StereoRigCalibration& rig,
-                                         const DynamicInitOptions& o) {
+                                         const DynamicInitOptions& o, const TriangulationOptions& tri) {
   const SE3d& T_b_c = rig.cameras[0].T_b_c;
   const SE3d T_c_b = T_b_c.inverse();
-  const std::vector<StereoPoints> points = stereo_points(w, rig.T_c0_c1());
+  const std::vector<StereoPoints> points = stereo_points(w, rig.T_c0_c1(), tri);
   std::vector<SE3d> T_b0_bk = {SE3d()};
   for (std::size_t i = 0; i + 1 < w.frames.size(); ++i) {
     // Rotation guess from the gyroscope: R_cj_ci = R_c_b dR^T R_b_c.
@@ -464,7 +463,7 @@ Variables initial_variables(const std::vector<SE3d>& T_b0_bk, const LinearSoluti
 
 /// Triangulates the longest tracks (seen in 2 or more window frames) from the initial poses.
 void add_landmarks(const Window& w, const config::StereoRigCalibration& rig, const DynamicInitOptions& o,
-                   Variables* x) {
+                   const TriangulationOptions& tri, Variables* x) {
   std::unordered_map<FeatureId, Landmark> tracks;
   for (std::size_t k = 0; k < w.frames.size(); ++k) {
     for (const FeatureObservation& f : w.frames[k]->features) {
@@ -481,7 +480,6 @@ void add_landmarks(const Window& w, const config::StereoRigCalibration& rig, con
   std::sort(all.begin(), all.end(), [](const Landmark& a, const Landmark& b) {
     return a.obs.size() != b.obs.size() ? a.obs.size() > b.obs.size() : a.id < b.id;
   });
-  const TriangulationOptions tri;
   for (Landmark& l : all) {
     if (static_cast<int>(x->landmarks.size()) >= o.max_features) break;
     std::vector<BearingObservation> bearings;
@@ -662,11 +660,12 @@ StatusOr<InitializationResult> dynamic_initialize(const std::vector<FeatureFrame
                                                   const std::vector<io::ImuSample>& imu,
                                                   const config::StereoRigCalibration& rig,
                                                   const ImuNoise& noise, double g,
-                                                  const DynamicInitOptions& options) {
+                                                  const DynamicInitOptions& options,
+                                                  const TriangulationOptions& triangulation) {
   MRVS_ASSIGN_OR_RETURN(const Window w, select_window(frames, rig.cameras[0].time_offset_ns, options));
   MRVS_ASSIGN_OR_RETURN(std::vector<Preintegration> pre,
                         preintegrate_window(w, imu, Vec3d::Zero(), Vec3d::Zero(), noise));
-  MRVS_ASSIGN_OR_RETURN(const std::vector<SE3d> T_b0_bk, visual_poses(w, pre, rig, options));
+  MRVS_ASSIGN_OR_RETURN(const std::vector<SE3d> T_b0_bk, visual_poses(w, pre, rig, options, triangulation));
   MRVS_ASSIGN_OR_RETURN(const Vec3d bg, estimate_gyro_bias(w, imu, T_b0_bk, noise, &pre));
   const double rotation_deg = window_rotation_deg(pre);
   if (rotation_deg < options.min_rotation_deg) {
@@ -676,7 +675,7 @@ StatusOr<InitializationResult> dynamic_initialize(const std::vector<FeatureFrame
   }
   MRVS_ASSIGN_OR_RETURN(const LinearSolution lin, solve_linear(T_b0_bk, pre, g, options));
   Variables x = initial_variables(T_b0_bk, lin, bg);
-  add_landmarks(w, rig, options, &x);
+  add_landmarks(w, rig, options, triangulation, &x);
   RightQuaternionManifold manifold;
   ceres::HuberLoss loss(1.0);
   MRVS_ASSIGN_OR_RETURN(Refinement r, refine(w, imu, noise, g, rig, options, &manifold, &loss, &x));

@@ -61,8 +61,8 @@ StatusOr<InitializationResult> static_initialize(const std::vector<io::ImuSample
 }
 
 Initializer::Initializer(const InitializerOptions& options, const config::StereoRigCalibration& rig,
-                         const ImuNoise& noise, double g)
-    : options_(options), rig_(rig), noise_(noise), g_(g) {}
+                         const ImuNoise& noise, double g, const TriangulationOptions& triangulation)
+    : options_(options), rig_(rig), noise_(noise), g_(g), triangulation_(triangulation) {}
 
 void Initializer::feed_imu(const io::ImuSample& s) {
   imu_.push_back(s);
@@ -139,7 +139,7 @@ std::optional<InitializationResult> Initializer::try_initialize(std::string* why
   }
   const std::vector<FeatureFrame> frames(frames_.begin(), frames_.end());
   const std::vector<io::ImuSample> imu(imu_.begin(), imu_.end());
-  auto r = dynamic_initialize(frames, imu, rig_, noise_, g_, options_.dynamic_options);
+  auto r = dynamic_initialize(frames, imu, rig_, noise_, g_, options_.dynamic_options, triangulation_);
   if (!r.ok()) {
     *why = fmt::format("moving ({:.1f} px over {:.1f} s); dynamic initialisation: {}", window_disparity,
                        options_.window_s, std::string(r.status().message()));

@@ -34,7 +34,7 @@ VioEstimator::VioEstimator(const EstimatorOptions& options, const config::Stereo
       groundtruth_(std::move(groundtruth)),
       noise_(scaled_noise(rig.imu, options.propagator.noise_multiplier)),
       g_w_(0.0, 0.0, -options.propagator.gravity_mps2),
-      initializer_(options.initializer, rig, noise_, options.propagator.gravity_mps2),
+      initializer_(options.initializer, rig, noise_, options.propagator.gravity_mps2, options.triangulation),
       msckf_(options.msckf, options.triangulation),
       stage1_mode_(parse_stage1_mode(options.map.stage1_mode).value_or(Stage1Mode::kKnownLandmark)),
       points_(options.points, options.triangulation),
@@ -200,7 +200,7 @@ void VioEstimator::restart() {
   localiser_.reset();
   db_ = FeatureDatabase();
   registered_ = RegisteredMap(options_.map.registered_voxel_m, options_.map.registered_per_voxel);
-  initializer_ = Initializer(options_.initializer, rig_, noise_, options_.propagator.gravity_mps2);
+  initializer_ = Initializer(options_.initializer, rig_, noise_, options_.propagator.gravity_mps2, options_.triangulation);
   // The initialiser starts from the IMU after the gap.
   for (const io::ImuSample& s : imu_) initializer_.feed_imu(s);
 }

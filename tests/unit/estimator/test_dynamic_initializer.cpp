@@ -71,9 +71,11 @@ struct TrackOptions {
   double sigma_px = 0.5;          ///< pixel noise
   double outlier_fraction = 0.0;  ///< tracks that jump 8-30 px halfway through
   std::uint64_t seed = 7;
+  double min_depth_m = 1.0;  ///< the points' depth range in front of the frames, m
+  double max_depth_m = 6.0;
 };
 
-/// Points 1-6 m in front of cam0 at five frames spread over the window.
+/// Points min_depth_m - max_depth_m in front of cam0 at five frames spread over the window.
 std::vector<Vec3d> random_points(const sim::World& w, const TrackOptions& o, std::mt19937_64* rng) {
   const config::CameraCalibration& cam = w.calibration.cameras[0];
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -82,7 +84,7 @@ std::vector<Vec3d> random_points(const sim::World& w, const TrackOptions& o, std
     const std::size_t k = o.first + (static_cast<std::size_t>(i % 5) * (o.count - 1)) / 4;
     const Vec2d uv(u(*rng) * (cam.model->width() - 1), u(*rng) * (cam.model->height() - 1));
     const Vec3d bearing = *cam.model->unproject(uv);
-    const double depth = 1.0 + 5.0 * u(*rng);
+    const double depth = o.min_depth_m + (o.max_depth_m - o.min_depth_m) * u(*rng);
     out.push_back(w.frame_pose(k) * cam.T_b_c * Vec3d(bearing / bearing.z() * depth));
   }
   return out;
@@ -422,6 +424,31 @@ TEST(DynamicInit, RefusesAWindowWithoutRotation) {
   EXPECT_EQ(r.status().code(), absl::StatusCode::kFailedPrecondition);
   EXPECT_NE(r.status().message().find("not enough rotation"), std::string::npos) << r.status();
   EXPECT_NE(r.status().message().find("min_rotation_deg"), std::string::npos) << r.status();
+}
+
+// The stereo points come from the caller's triangulation bounds: a street's points lie far
+// beyond the default's 40 baselines (here 0.11 m: 4.4 m), where the estimator's own options
+// (config/kaist.yaml: 200 baselines) still take them.
+TEST(DynamicInit, TakesFarPointsWithTheEstimatorsTriangulationOptions) {
+  const sim::World& w = world({});
+  TrackOptions tracks;
+  tracks.min_depth_m = 6.0;
+  tracks.max_depth_m = 12.0;
+  tracks.sigma_px = 0.2;
+  const std::vector<FeatureFrame> frames = make_frames(w, tracks);
+  const auto refused = dynamic_initialize(frames, measured_imu(w), w.calibration, noise_of(w.calibration),
+                                          kGravity, test_options());
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("too few features"), std::string::npos) << refused.status();
+  TriangulationOptions far;
+  far.max_baseline_ratio = 200.0;
+  far.max_cond = 1e6;
+  const auto r = dynamic_initialize(frames, measured_imu(w), w.calibration, noise_of(w.calibration), kGravity,
+                                    test_options(), far);
+  ASSERT_TRUE(r.ok()) << r.status();
+  const Errors e = errors_of(*r, truth_at(w, tracks.first + tracks.count - 1));
+  EXPECT_LT(e.gravity_deg, 1.0);
+  EXPECT_LT(e.velocity, 0.1);
 }
 
 TEST(DynamicInit, RefusesTooFewFeatures) {

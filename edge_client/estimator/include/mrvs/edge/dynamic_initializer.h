@@ -18,6 +18,7 @@
 #include "mrvs/core/status.h"
 #include "mrvs/edge/feature_observation.h"
 #include "mrvs/edge/imu_propagator.h"
+#include "mrvs/edge/triangulation.h"
 #include "mrvs/io/types.h"
 
 namespace mrvs::edge {
@@ -78,11 +79,13 @@ struct InitializationResult {
 /// Attempts a dynamic initialisation from `frames` (time-ordered, camera clock) and `imu`
 /// (covering them). `g` is the gravity magnitude (m/s^2). FailedPrecondition saying why
 /// when the window does not allow it yet (too little rotation, too few features, the solve
-/// is ill-conditioned): the caller waits for more data.
+/// is ill-conditioned): the caller waits for more data. `triangulation` bounds the stereo and
+/// window points (the estimator's: a street's far points need a larger baseline ratio).
 StatusOr<InitializationResult> dynamic_initialize(const std::vector<FeatureFrame>& frames,
                                                   const std::vector<io::ImuSample>& imu,
                                                   const config::StereoRigCalibration& rig,
                                                   const ImuNoise& noise, double g,
-                                                  const DynamicInitOptions& options);
+                                                  const DynamicInitOptions& options,
+                                                  const TriangulationOptions& triangulation = {});
 
 }  // namespace mrvs::edge

@@ -58,7 +58,7 @@ StatusOr<InitializationResult> static_initialize(const std::vector<io::ImuSample
 class Initializer {
  public:
   Initializer(const InitializerOptions& options, const config::StereoRigCalibration& rig,
-              const ImuNoise& noise, double g);
+              const ImuNoise& noise, double g, const TriangulationOptions& triangulation);
 
   void feed_imu(const io::ImuSample& s);
   void feed_frame(const FeatureFrame& frame);
@@ -77,6 +77,7 @@ class Initializer {
   config::StereoRigCalibration rig_;
   ImuNoise noise_;
   double g_;
+  TriangulationOptions triangulation_;  ///< the estimator's (the dynamic initialiser's points)
   std::deque<io::ImuSample> imu_;
   std::deque<FeatureFrame> frames_;
 };
