@@ -25,6 +25,7 @@
 #             map_start" for the map-based start against the paper's; no link experiments
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/build.sh"
+source "$MRVS_ROOT/scripts/lib/outdoor_route.sh"
 
 quick=false
 link=true
@@ -126,9 +127,7 @@ for entry in "${sequences[@]}"; do
   else
     config=$MRVS_ROOT/config/kaist.yaml map_config=$MRVS_ROOT/config/map_outdoor.yaml
     export MRVS_MAP_WAIT=180  # the server loads a 3 GB map first
-    # 2.2 km: five straights joined by four tight turns (left, left, right, right)
-    gen=(--profile outdoor --set "route.straight_lengths_m=[500,400,500,400,300]"
-         --set "route.turn_directions=[-1,-1,1,1]" --set "route.turn_radii_m=[18,18,18,18]")
+    gen=("${MRVS_OUTDOOR_ROUTE[@]}")  # 2.2 km (scripts/lib/outdoor_route.sh)
   fi
   [[ $duration == 0 ]] || gen+=(--duration "$duration")
   for seed in $seeds; do

@@ -182,6 +182,7 @@ struct LocalisationReport {
   int requests = 0, replies = 0, timeouts = 0, accepted = 0, fixes_applied = 0, fixes_refused = 0,
       doubted = 0;
   std::vector<double> after_s;  ///< per filter run placed in the map: seconds from its initialisation
+  std::vector<mrvs::TimestampNs> at_t_imu_ns;  ///< ... and the IMU time of the pose it was placed at
   int placed_run = -1;          ///< the last filter run placed (a re-lock after a doubt is not a new run)
   std::vector<double> bytes_up, bytes_down, rtt_ms, cloud_ms, points;
   double first_after_s = -1.0;           ///< sensor time from initialisation to the first acceptance
@@ -245,8 +246,8 @@ void print_report(const Report& r, double wall_s) {
       "LOCALISATION_REQUESTS: {}\nLOCALISATION_REPLIES: {}\nLOCALISATION_TIMEOUTS: {}\nLOCALISED: {}\n",
       L.requests, L.replies, L.timeouts, L.accepted);
   fmt::print("LOCALISED_AFTER_S: {:.3f}\nLOCALISED_AT_T_NS: {}\n", L.first_after_s, L.first_t_imu_ns);
-  fmt::print("FILTER_RUNS: {}\nLOCALISED_RUNS: {}\nLOCALISED_AFTER_S_PER_RUN: {:.2f}\n", r.run,
-             L.after_s.size(), fmt::join(L.after_s, ","));
+  fmt::print("FILTER_RUNS: {}\nLOCALISED_RUNS: {}\nLOCALISED_AFTER_S_PER_RUN: {:.2f}\nLOCALISED_AT_T_NS_PER_RUN: {}\n",
+             r.run, L.after_s.size(), fmt::join(L.after_s, ","), fmt::join(L.at_t_imu_ns, ","));
   fmt::print("LOCALISATION_FIXES: {}\nLOCALISATION_FIXES_REFUSED: {}\nLOCKS_DOUBTED: {}\n", L.fixes_applied,
              L.fixes_refused, L.doubted);
   fmt::print(
@@ -332,7 +333,10 @@ void account_localisation(const mrvs::edge::FrameOutput& e, Report* r) {
     L.cloud_ms.push_back(l.cloud_ms);
   }
   if (!e.T_m_o) return;
-  if (e.run != L.placed_run) L.after_s.push_back(mrvs::to_seconds(e.t_ns - r->run_start_ns));
+  if (e.run != L.placed_run) {
+    L.after_s.push_back(mrvs::to_seconds(e.t_ns - r->run_start_ns));
+    L.at_t_imu_ns.push_back(e.t_imu_ns);
+  }
   L.placed_run = e.run;
   if (++L.accepted == 1) {
     L.first_after_s = mrvs::to_seconds(e.t_ns - r->run_start_ns);

@@ -3,6 +3,7 @@
 // clip beats plain VIO, the link figures stay within the paper's budget, and a cloud killed
 // mid-run leaves a client that finishes as plain VIO and uses the map again after a restart.
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -277,6 +278,13 @@ TEST(EdgeClientMap, AfterARestartTheCloudPlacesTheClientAgain) {
   if (at != std::string::npos)
     RecordProperty("localised_after_s_per_run",
                    run.output.substr(at + per_run.size(), run.output.find('\n', at) - at - per_run.size()));
+  // Where each run was placed (IMU time): two instants, the second after the first.
+  const std::string key = "LOCALISED_AT_T_NS_PER_RUN: ";
+  const std::size_t k = run.output.find(key);
+  ASSERT_NE(k, std::string::npos) << run.output;
+  long long first = 0, second = 0;
+  ASSERT_EQ(std::sscanf(run.output.c_str() + k + key.size(), "%lld,%lld", &first, &second), 2) << run.output;
+  EXPECT_GT(second, first + 1'000'000'000LL);
   const double ate = ate_raw(dir / "traj.txt");
   RecordProperty("ate_m", std::to_string(ate));
   EXPECT_LT(ate, 0.05) << run.output;
