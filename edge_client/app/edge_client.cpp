@@ -30,6 +30,7 @@
 #include "mrvs/core/memory.h"
 #include "mrvs/core/stats.h"
 #include "mrvs/edge/dds_map_service.h"
+#include "mrvs/edge/map_trajectory.h"
 #include "mrvs/edge/vio_system.h"
 #include "mrvs/io/dataset.h"
 #include "mrvs/io/trajectory_io.h"
@@ -195,12 +196,9 @@ struct Report {
   int frames = 0, skipped = 0, initialized_at = -1, points_max = 0, frames_without_map = 0, requests = 0,
       timeouts = 0;
   double frame_interval_ms = 0.0;   ///< median image interval of the dataset (the frame's real-time budget)
-  mrvs::io::Trajectory trajectory;  ///< map frame
-  mrvs::io::Trajectory odometry;    ///< every pose in its filter run's odometry frame, until mapped
-  mrvs::io::Trajectory unmapped;    ///< poses of the current run not yet in the map frame
+  mrvs::edge::MapTrajectory poses;  ///< what --output writes
   int run = 0;
   mrvs::TimestampNs run_start_ns = 0;
-  int poses_never_mapped = 0;  ///< not placed by the cloud: written as the filter had them (keep_unplaced)
   LocalisationReport loc;
 };
 
@@ -216,7 +214,7 @@ double mean(const std::vector<double>& v) {
 
 void print_report(const Report& r, double wall_s) {
   fmt::print("FRAMES: {}\nFRAMES_SKIPPED: {}\nINITIALIZED_AT_FRAME: {}\nPOSES: {}\n", r.frames, r.skipped,
-             r.initialized_at, r.trajectory.empty() ? r.odometry.size() : r.trajectory.size());
+             r.initialized_at, r.poses.trajectory().empty() ? r.poses.odometry().size() : r.poses.trajectory().size());
   fmt::print("FRAME_INTERVAL_MS: {:.3f}\n", r.frame_interval_ms);
   fmt::print("WALL_S: {:.2f}\nRATE_FPS: {:.1f}\nPOINTS_IN_STATE_MAX: {}\n", wall_s,
              r.frames / std::max(wall_s, 1e-9), r.points_max);
@@ -256,7 +254,7 @@ void print_report(const Report& r, double wall_s) {
       mean(L.points), mean(L.bytes_up), mean(L.bytes_down));
   print_ms("LOCALISATION_RTT", L.rtt_ms);
   print_ms("LOCALISATION_CLOUD", L.cloud_ms);
-  fmt::print("POSES_NEVER_IN_MAP_FRAME: {}\n", r.poses_never_mapped);
+  fmt::print("POSES_NEVER_IN_MAP_FRAME: {}\n", r.poses.never_mapped());
 }
 
 /// IMU samples dropped by --imu-outage: [from_ns, to_ns) (IMU clock).
@@ -283,35 +281,13 @@ mrvs::Status feed_sensors_until(mrvs::edge::VioSystem& vio, const mrvs::io::Data
   return absl::OkStatus();
 }
 
-/// The poses held for the cloud that it never placed (the run ended by a restart, or by the end
-/// of the data, after a doubted lock or before a new one): once the map-frame trajectory has
-/// begun they join it as the filter had them, in a frame that continues from its last placed
-/// pose (a restart starts there, a doubted lock keeps its frame), rather than being lost.
-void keep_unplaced(Report* r) {
-  r->poses_never_mapped += static_cast<int>(r->unmapped.size());
-  if (!r->trajectory.empty())
-    r->trajectory.insert(r->trajectory.end(), r->unmapped.begin(), r->unmapped.end());
-  r->unmapped.clear();
-}
-
-/// A pose into the map-frame trajectory, or (odometry frame) held until the cloud places its run.
+/// A pose into the trajectory; a new filter run starts its clock.
 void add_pose(const mrvs::edge::FrameOutput& e, Report* r) {
-  if (e.run != r->run) {  // a new filter run (restart): a new odometry frame
-    keep_unplaced(r);
+  if (e.run != r->run) {
     r->run = e.run;
     r->run_start_ns = e.t_ns;
   }
-  const mrvs::io::StampedPose pose{e.t_imu_ns, *e.T_w_b};
-  if (e.T_m_o) {  // placed this frame: the run's earlier poses follow
-    for (const mrvs::io::StampedPose& p : r->unmapped) r->trajectory.push_back({p.t_ns, *e.T_m_o * p.T_w_b});
-    r->unmapped.clear();
-  }
-  if (e.in_map_frame) {
-    r->trajectory.push_back(pose);
-  } else {
-    r->unmapped.push_back(pose);
-    r->odometry.push_back(pose);
-  }
+  r->poses.add(e.run, {e.t_imu_ns, *e.T_w_b}, e.in_map_frame, e.T_m_o, e.localisation.doubted);
 }
 
 void account_localisation(const mrvs::edge::FrameOutput& e, Report* r) {
@@ -491,15 +467,15 @@ int run(const Args& a) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!process(a, *in->dataset, *vio, use_map, &report)) return mrvs::kExitDataError;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  keep_unplaced(&report);
-  if (report.poses_never_mapped > 0 && !report.trajectory.empty()) {
+  report.poses.finish();
+  if (report.poses.never_mapped() > 0 && !report.poses.trajectory().empty()) {
     spdlog::warn(
         "{} poses were never placed by the cloud (a restart or a doubted lock it did not answer in time): "
         "written as the filter had them, continuing from its last placed pose",
-        report.poses_never_mapped);
+        report.poses.never_mapped());
   }
-  const bool mapped = !report.trajectory.empty();
-  mrvs::io::Trajectory& out = mapped ? report.trajectory : report.odometry;
+  const bool mapped = !report.poses.trajectory().empty();
+  mrvs::io::Trajectory out = mapped ? report.poses.trajectory() : report.poses.odometry();
   std::stable_sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.t_ns < y.t_ns; });
   if (!mapped && vio->estimator().options().alignment.source == "map" && use_map && !out.empty()) {
     spdlog::warn("the cloud never placed the filter in its map ({}): the trajectory is in the odometry frame",

@@ -1,0 +1,45 @@
+#pragma once
+// The trajectory edge_client writes, in the map frame: each filter run's poses are held in its
+// odometry frame until the cloud places the run (localisation answer T_map_odom), then join the
+// map-frame trajectory moved by it. The poses a lock placed that the edge later doubts (its pose
+// fixes refused) are in the filter's frame, which the doubt keeps: the next answer moves them
+// with the held ones that follow. Poses never placed (the run ended first, or its lock was
+// doubted and not replaced) are kept as the filter had them once the map-frame trajectory has
+// begun, and counted.
+#include <cstddef>
+#include <optional>
+
+#include "mrvs/core/time.h"
+#include "mrvs/geometry/se3.h"
+#include "mrvs/io/trajectory_io.h"
+
+namespace mrvs::edge {
+
+class MapTrajectory {
+ public:
+  /// The IMU pose of filter run `run` in the filter's frame (the map frame when `in_map_frame`);
+  /// `T_m_o` when the cloud placed the run at this frame; `doubted` when the lock was doubted.
+  void add(int run, const io::StampedPose& pose, bool in_map_frame, const std::optional<SE3d>& T_m_o,
+           bool doubted);
+  /// The end of the data: the poses still held join as they are (keep_unplaced).
+  void finish() { keep_unplaced(); }
+
+  /// Map frame (empty when the cloud never placed any run).
+  const io::Trajectory& trajectory() const { return trajectory_; }
+  /// Every pose in its run's odometry frame, until placed (the output without any lock).
+  const io::Trajectory& odometry() const { return odometry_; }
+  /// Poses written as the filter had them, never placed by the cloud.
+  int never_mapped() const { return never_mapped_; }
+
+ private:
+  void keep_unplaced();
+
+  io::Trajectory trajectory_, odometry_, held_;
+  std::size_t lock_begin_ = 0;  ///< trajectory_ index of the first pose the current lock placed
+  /// From here on trajectory_ holds what a doubted lock placed (the filter's frame, as held_).
+  std::optional<std::size_t> doubted_begin_;
+  int run_ = -1;
+  int never_mapped_ = 0;
+};
+
+}  // namespace mrvs::edge
