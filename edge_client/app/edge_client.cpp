@@ -184,7 +184,7 @@ struct LocalisationReport {
       doubted = 0;
   std::vector<double> after_s;  ///< per filter run placed in the map: seconds from its initialisation
   std::vector<mrvs::TimestampNs> at_t_imu_ns;  ///< ... and the IMU time of the pose it was placed at
-  int placed_run = -1;          ///< the last filter run placed (a re-lock after a doubt is not a new run)
+  int placed_run = -1;  ///< the last filter run placed (a re-lock after a doubt is not a new run)
   std::vector<double> bytes_up, bytes_down, rtt_ms, cloud_ms, points;
   double first_after_s = -1.0;           ///< sensor time from initialisation to the first acceptance
   mrvs::TimestampNs first_t_imu_ns = 0;  ///< IMU time of the pose at that frame
@@ -214,7 +214,8 @@ double mean(const std::vector<double>& v) {
 
 void print_report(const Report& r, double wall_s) {
   fmt::print("FRAMES: {}\nFRAMES_SKIPPED: {}\nINITIALIZED_AT_FRAME: {}\nPOSES: {}\n", r.frames, r.skipped,
-             r.initialized_at, r.poses.trajectory().empty() ? r.poses.odometry().size() : r.poses.trajectory().size());
+             r.initialized_at,
+             r.poses.trajectory().empty() ? r.poses.odometry().size() : r.poses.trajectory().size());
   fmt::print("FRAME_INTERVAL_MS: {:.3f}\n", r.frame_interval_ms);
   fmt::print("WALL_S: {:.2f}\nRATE_FPS: {:.1f}\nPOINTS_IN_STATE_MAX: {}\n", wall_s,
              r.frames / std::max(wall_s, 1e-9), r.points_max);
@@ -244,8 +245,10 @@ void print_report(const Report& r, double wall_s) {
       "LOCALISATION_REQUESTS: {}\nLOCALISATION_REPLIES: {}\nLOCALISATION_TIMEOUTS: {}\nLOCALISED: {}\n",
       L.requests, L.replies, L.timeouts, L.accepted);
   fmt::print("LOCALISED_AFTER_S: {:.3f}\nLOCALISED_AT_T_NS: {}\n", L.first_after_s, L.first_t_imu_ns);
-  fmt::print("FILTER_RUNS: {}\nLOCALISED_RUNS: {}\nLOCALISED_AFTER_S_PER_RUN: {:.2f}\nLOCALISED_AT_T_NS_PER_RUN: {}\n",
-             r.run, L.after_s.size(), fmt::join(L.after_s, ","), fmt::join(L.at_t_imu_ns, ","));
+  fmt::print(
+      "FILTER_RUNS: {}\nLOCALISED_RUNS: {}\nLOCALISED_AFTER_S_PER_RUN: {:.2f}\nLOCALISED_AT_T_NS_PER_RUN: "
+      "{}\n",
+      r.run, L.after_s.size(), fmt::join(L.after_s, ","), fmt::join(L.at_t_imu_ns, ","));
   fmt::print("LOCALISATION_FIXES: {}\nLOCALISATION_FIXES_REFUSED: {}\nLOCKS_DOUBTED: {}\n", L.fixes_applied,
              L.fixes_refused, L.doubted);
   fmt::print(

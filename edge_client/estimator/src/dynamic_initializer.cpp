@@ -110,7 +110,8 @@ StatusOr<std::vector<Preintegration>> preintegrate_window(const Window& w,
 using StereoPoints = std::unordered_map<FeatureId, Vec3d>;  ///< per feature: the point in cam0
 
 /// The stereo-triangulated points of every window frame.
-std::vector<StereoPoints> stereo_points(const Window& w, const SE3d& T_c0_c1, const TriangulationOptions& tri) {
+std::vector<StereoPoints> stereo_points(const Window& w, const SE3d& T_c0_c1,
+                                        const TriangulationOptions& tri) {
   std::vector<StereoPoints> out(w.frames.size());
   for (std::size_t k = 0; k < w.frames.size(); ++k) {
     for (const FeatureObservation& f : w.frames[k]->features) {
@@ -218,8 +219,8 @@ Vec3d median_translation(const StereoPoints& points_i, const StereoPoints& point
 
 /// T_b0_bk of every window frame from the chained relative camera poses.
 StatusOr<std::vector<SE3d>> visual_poses(const Window& w, const std::vector<Preintegration>& pre,
-                                         const config::StereoRigCalibration& rig,
-                                         const DynamicInitOptions& o, const TriangulationOptions& tri) {
+                                         const config::StereoRigCalibration& rig, const DynamicInitOptions& o,
+                                         const TriangulationOptions& tri) {
   const SE3d& T_b_c = rig.cameras[0].T_b_c;
   const SE3d T_c_b = T_b_c.inverse();
   const std::vector<StereoPoints> points = stereo_points(w, rig.T_c0_c1(), tri);

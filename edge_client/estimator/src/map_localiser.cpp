@@ -47,9 +47,9 @@ std::optional<Vec3d> track_at(const std::deque<OdometrySample>& track, Timestamp
   if (after == track.begin()) return track.front().p_o;
   if (after == track.end()) return track.back().p_o;
   const OdometrySample& before = *std::prev(after);
-  const double u = after->t_ns == before.t_ns
-                       ? 1.0
-                       : static_cast<double>(t_ns - before.t_ns) / static_cast<double>(after->t_ns - before.t_ns);
+  const double u = after->t_ns == before.t_ns ? 1.0
+                                              : static_cast<double>(t_ns - before.t_ns) /
+                                                    static_cast<double>(after->t_ns - before.t_ns);
   return before.p_o + u * (after->p_o - before.p_o);
 }
 
@@ -64,8 +64,8 @@ struct FixSphere {
 
 std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix>& fixes,
                                                     const std::deque<OdometrySample>& track, TimestampNs t_ns,
-                                                    const Vec3d& anchor_o, double window_s, double lever_arm_m,
-                                                    const LocalisationOptions& o) {
+                                                    const Vec3d& anchor_o, double window_s,
+                                                    double lever_arm_m, const LocalisationOptions& o) {
   std::vector<FixSphere> spheres;
   for (const io::GnssFix& f : fixes) {
     if (f.t_ns > t_ns || f.t_ns < t_ns - from_seconds(window_s)) continue;
@@ -84,7 +84,8 @@ std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix
     std::size_t agreeing = 0;
     for (const FixSphere& b : spheres) agreeing += (&a != &b && agree(a, b)) ? 1 : 0;
     if (2 * agreeing < spheres.size() - 1) continue;  // contradicts most of the others
-    best = tighter(best, localisation::PriorRegion{a.g, a.radius_m + (anchor_o - a.o).norm() + o.gnss_margin_m});
+    best =
+        tighter(best, localisation::PriorRegion{a.g, a.radius_m + (anchor_o - a.o).norm() + o.gnss_margin_m});
   }
   if (best) return best;
   // No majority (two fixes that contradict each other): a sphere around all of them.

@@ -200,7 +200,8 @@ void VioEstimator::restart() {
   localiser_.reset();
   db_ = FeatureDatabase();
   registered_ = RegisteredMap(options_.map.registered_voxel_m, options_.map.registered_per_voxel);
-  initializer_ = Initializer(options_.initializer, rig_, noise_, options_.propagator.gravity_mps2, options_.triangulation);
+  initializer_ = Initializer(options_.initializer, rig_, noise_, options_.propagator.gravity_mps2,
+                             options_.triangulation);
   // The initialiser starts from the IMU after the gap.
   for (const io::ImuSample& s : imu_) initializer_.feed_imu(s);
 }

@@ -10,8 +10,8 @@ void MapTrajectory::keep_unplaced() {
   held_.clear();
 }
 
-void MapTrajectory::add(int run, const io::StampedPose& pose, bool in_map_frame, const std::optional<SE3d>& T_m_o,
-                        bool doubted) {
+void MapTrajectory::add(int run, const io::StampedPose& pose, bool in_map_frame,
+                        const std::optional<SE3d>& T_m_o, bool doubted) {
   if (run != run_) {  // a new filter run (restart): a new odometry frame
     keep_unplaced();
     run_ = run;

@@ -487,7 +487,8 @@ TEST(MapLocaliser, TheGnssPriorDropsAnOutlierAndNeedsAFixTheTrackCovers) {
   o.gnss_margin_m = 2.0;
   const auto [p_m, track] = drive(10.0, 0.0, 1.0, Vec3d(5.0, 6.0, 0.0));
   std::deque<io::GnssFix> fixes;
-  for (int k = 0; k <= 70; k += 10) fixes.push_back({k * 100 * kMillisecond, p_m[static_cast<std::size_t>(k)], 1.5, 3.0});
+  for (int k = 0; k <= 70; k += 10)
+    fixes.push_back({k * 100 * kMillisecond, p_m[static_cast<std::size_t>(k)], 1.5, 3.0});
   fixes.back().p_map.y() += 40.0;  // the newest fix a multipath outlier
   const TimestampNs now = 78 * 100 * kMillisecond;
   const auto prior = gnss_prior(fixes, track, now, track[78].p_o, 6.0, 0.4, o);

@@ -30,7 +30,8 @@ TEST(MapTrajectory, APlacedRunsEarlierPosesFollowItsAnswer) {
   for (int k = 0; k < 10; ++k) {
     const bool placed = k == 4;
     const SE3d T_w_b = k < 4 ? T_o_m * truth(k) : truth(k);  // the state moves into the map at the lock
-    t.add(0, {k * kSecond, T_w_b}, k >= 4, placed ? std::optional<SE3d>(T_o_m.inverse()) : std::nullopt, false);
+    t.add(0, {k * kSecond, T_w_b}, k >= 4, placed ? std::optional<SE3d>(T_o_m.inverse()) : std::nullopt,
+          false);
   }
   t.finish();
   ASSERT_EQ(t.trajectory().size(), 10u);
@@ -43,14 +44,15 @@ TEST(MapTrajectory, APlacedRunsEarlierPosesFollowItsAnswer) {
 // then places the filter right: every pose, those the wrong lock placed too, ends in the map.
 TEST(MapTrajectory, ADoubtedLocksPosesAreMovedByTheNextAnswer) {
   const SE3d T_o_m = frame(0.3, Vec3d(1.0, 2.0, 0.0));
-  const SE3d wrong = frame(M_PI, Vec3d(4.0, 0.0, 0.0)) * T_o_m.inverse();  // what the wrong lock says T_m_o is
+  const SE3d wrong =
+      frame(M_PI, Vec3d(4.0, 0.0, 0.0)) * T_o_m.inverse();  // what the wrong lock says T_m_o is
   // The filter's frame after the wrong lock: f = wrong * o; the right answer then is T_m_f.
   const SE3d T_m_f = T_o_m.inverse() * wrong.inverse();
   MapTrajectory t;
   for (int k = 0; k < 20; ++k) {
     std::optional<SE3d> placed;
     bool in_map = false, doubted = false;
-    SE3d T_w_b = T_o_m * truth(k);  // odometry frame before the wrong lock
+    SE3d T_w_b = T_o_m * truth(k);                 // odometry frame before the wrong lock
     if (k >= 3) T_w_b = wrong * T_o_m * truth(k);  // the filter's frame from the wrong lock on
     if (k == 3) placed = wrong;
     in_map = (k >= 3 && k < 8) || k >= 12;
@@ -71,8 +73,8 @@ TEST(MapTrajectory, PosesNeverPlacedAgainAreKeptAndCounted) {
   MapTrajectory t;
   const SE3d off = frame(0.0, Vec3d(0.5, 0.0, 0.0));
   for (int k = 0; k < 6; ++k) {
-    t.add(0, {k * kSecond, off * truth(k)}, k >= 2 && k < 4, k == 2 ? std::optional<SE3d>(SE3d()) : std::nullopt,
-          k == 4);
+    t.add(0, {k * kSecond, off * truth(k)}, k >= 2 && k < 4,
+          k == 2 ? std::optional<SE3d>(SE3d()) : std::nullopt, k == 4);
   }
   for (int k = 6; k < 10; ++k) {
     t.add(1, {k * kSecond, truth(k)}, k >= 7, k == 7 ? std::optional<SE3d>(SE3d()) : std::nullopt, false);
@@ -81,7 +83,9 @@ TEST(MapTrajectory, PosesNeverPlacedAgainAreKeptAndCounted) {
   ASSERT_EQ(t.trajectory().size(), 10u);
   EXPECT_EQ(t.never_mapped(), 6);  // run 0: the two before the lock and the four it placed or held
   EXPECT_NEAR(max_error(t.trajectory(), 0, 6), 0.5, 1e-12);
-  for (std::size_t i = 6; i < 10; ++i) EXPECT_LT((t.trajectory()[i].T_w_b.translation() - truth(static_cast<int>(i)).translation()).norm(), 1e-12);
+  for (std::size_t i = 6; i < 10; ++i)
+    EXPECT_LT((t.trajectory()[i].T_w_b.translation() - truth(static_cast<int>(i)).translation()).norm(),
+              1e-12);
 }
 
 }  // namespace

@@ -134,8 +134,8 @@ struct OdometrySample {
 /// is returned, its radius plus gnss_margin_m. nullopt without such a fix.
 std::optional<localisation::PriorRegion> gnss_prior(const std::deque<io::GnssFix>& fixes,
                                                     const std::deque<OdometrySample>& track, TimestampNs t_ns,
-                                                    const Vec3d& anchor_o, double window_s, double lever_arm_m,
-                                                    const LocalisationOptions& options);
+                                                    const Vec3d& anchor_o, double window_s,
+                                                    double lever_arm_m, const LocalisationOptions& options);
 
 /// Where the previous filter run ended, placed in the map (map frame), and how fast it moved.
 /// A run that ended unplaced after such a restart hands on its own start's region: the centre
