@@ -287,7 +287,11 @@ std::optional<Alignment> MapLocaliser::step(TimestampNs t_ns, const Vec3d& ancho
     status_ = fmt::format("localisation request not sent: {}", std::string(sent.status().message()));
     return std::nullopt;
   }
-  pending_ = Pending{q->seq, t_ns - from_seconds(window_s_), t_ns, anchor_o, Clock::now()};
+  // The submap's data began at most window_s ago, and not before the run's first frame: a
+  // window reaching back before it holds no more data (two answers in a run's first seconds
+  // share it and are not independent).
+  const TimestampNs from = std::max(t_ns - from_seconds(window_s_), *first_ns_);
+  pending_ = Pending{q->seq, from, t_ns, anchor_o, Clock::now()};
   ++requests_;
   ++stats->requests;
   stats->bytes_up += *sent;

@@ -119,6 +119,30 @@ TEST(MapLocaliser, TwoAgreeingAnswersFromNewDataPlaceTheFilter) {
   EXPECT_EQ(a->anchor_m, T * q.anchor_o);
 }
 
+// A submap is dated from the run's first frame when its window reaches back before it: with
+// a 3 s window, the answers at 1, 2 and 3 s all hold the first second's data and none is
+// independent of the first; the one at 4 s is (its data begins at 1 s).
+TEST(MapLocaliser, AnswersInARunsFirstSecondsShareTheirDataAndAreNotIndependent) {
+  const SE3d T(Quatd(Eigen::AngleAxisd(0.2, Vec3d::UnitZ())), Vec3d(1.0, 2.0, 0.0));
+  LocalisationOptions o = options();
+  o.window_s = 3.0;
+  {
+    ScriptedCloud cloud;
+    cloud.script = {ok_result(T), ok_result(T), ok_result(T)};
+    MapLocaliser loc(o);
+    EXPECT_FALSE(run(loc, cloud, 0, 3.9).has_value()) << loc.status();
+    EXPECT_EQ(cloud.sent.size(), 3u);
+    EXPECT_TRUE(cloud.script.empty());  // all three answered
+  }
+  ScriptedCloud cloud;
+  cloud.script = {ok_result(T), ok_result(T), ok_result(T), ok_result(T)};
+  MapLocaliser loc(o);
+  const auto a = run(loc, cloud, 0, 5.0);
+  ASSERT_TRUE(a.has_value()) << loc.status();
+  EXPECT_EQ(cloud.sent.size(), 4u);
+  EXPECT_EQ(cloud.sent.back().stamp_ns, 4 * kSecond);
+}
+
 TEST(MapLocaliser, TheAgreeingAnswersAreCombinedByTheirCovariances) {
   ScriptedCloud cloud;
   const SE3d T1(Quatd(Eigen::AngleAxisd(0.3 * kDegToRad, Vec3d::UnitZ())), Vec3d(1.00, 2.0, 0.0));
