@@ -157,7 +157,8 @@ with open(os.path.join(out, "REPORT.md"), "w") as f:
         f.write("- payload per request / reply: %.0f B / %.0f B (CDR, mean over runs)\n\n"
                 % (st.mean(bytes_up), st.mean(bytes_down)))
     f.write("Times in s from the start of the route (initialised) and from the run's initialisation "
-            "(localised after); errors of the placed pose against the truth at the lock.\n\n")
+            "(localised after); errors of the written pose against the truth at the run's first lock "
+            "(a lock later doubted: as the next lock placed it again, edge_client/README.md).\n\n")
     f.write("| seed | start: initialised | localised after | error m | error deg | restart: initialised "
             "| localised after | error m | error deg | filter runs | requests | pose fixes | locks doubted "
             "| ATE m (unaligned) | poses never placed |\n")
