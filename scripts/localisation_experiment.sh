@@ -99,17 +99,11 @@ done
 fi
 
 step "report"
-"$(command -v /usr/bin/python3 || command -v python3)" - "$out" "$seed" "$per" "$duration" "$offset" <<'PY'
+MRVS_LIB=$MRVS_ROOT/scripts/lib "$(command -v /usr/bin/python3 || command -v python3)" - "$out" "$seed" "$per" "$duration" "$offset" <<'PY'
 import glob, os, statistics as st, sys
 out, seed, per, duration, offset = sys.argv[1:6]
-def keys(path):
-    kv = {}
-    if os.path.isfile(path):
-        for line in open(path):
-            if ": " in line:
-                k, v = line.split(": ", 1)
-                kv[k.strip()] = v.strip()
-    return kv
+sys.path.insert(0, os.environ["MRVS_LIB"])
+from result_files import keys
 ex = keys(os.path.join(out, "experiment.txt"))
 rev = ex.get("revision", "unknown")
 seed, per, duration, offset = (ex.get(k, v) for k, v in

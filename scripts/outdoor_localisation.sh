@@ -89,17 +89,11 @@ if [[ $report_only -eq 0 ]]; then
 fi
 
 step "report"
-"$(command -v /usr/bin/python3 || command -v python3)" - "$out" <<'PY'
+MRVS_LIB=$MRVS_ROOT/scripts/lib "$(command -v /usr/bin/python3 || command -v python3)" - "$out" <<'PY'
 import glob, os, statistics as st, sys
 out = sys.argv[1]
-def keys(path):
-    kv = {}
-    if os.path.isfile(path):
-        for line in open(path):
-            if ": " in line:
-                k, v = line.split(": ", 1)
-                kv[k.strip()] = v.strip()
-    return kv
+sys.path.insert(0, os.environ["MRVS_LIB"])
+from result_files import keys
 def lines(path):
     return [l.strip() for l in open(path) if l.strip()] if os.path.isfile(path) else []
 exp = keys(os.path.join(out, "experiment.txt"))

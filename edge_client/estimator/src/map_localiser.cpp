@@ -11,7 +11,6 @@
 #include <Eigen/Cholesky>
 
 #include "mrvs/core/hash.h"
-#include "mrvs/core/stats.h"
 #include "mrvs/edge/global_alignment.h"
 #include "mrvs/geometry/angles.h"
 
