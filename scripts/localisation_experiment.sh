@@ -80,12 +80,17 @@ for trajectory in "$shared"/data/euroc_groundtruth/*.txt; do
         --config "$MRVS_ROOT/config/map_indoor.yaml" --out "$map" --log-level warn >/dev/null
     run=$out/runs/${name}_start$start
     mkdir -p "$run"
-    echo "scripts/lib/map_run.sh $map $clip OUT config/euroc.yaml config/map_indoor.yaml --realtime" >"$run/command.txt"
+    echo "scripts/lib/map_run.sh $map $clip OUT config/euroc.yaml config/map_indoor.yaml --realtime --lock-poses OUT/locks.txt" >"$run/command.txt"
+    # A clip whose filter never initialises (edge_client exits 1) counts as not localised.
     in_netns "$MRVS_ROOT/scripts/lib/map_run.sh" "$map" "$clip" "$run" "$MRVS_ROOT/config/euroc.yaml" \
-        "$MRVS_ROOT/config/map_indoor.yaml" --realtime --log-level info --progress 0 2>"$run/edge.log"
+        "$MRVS_ROOT/config/map_indoor.yaml" --realtime --log-level info --progress 0 --lock-poses "$run/locks.txt" \
+        2>"$run/edge.log" ||
+      echo "localisation_experiment.sh: edge_client failed on $name from $start s: $(tail -n 1 "$run/edge.log")" >&2
     at=$(value "$run/edge.txt" LOCALISED_AT_T_NS)
     if [[ $(value "$run/edge.txt" LOCALISED) -ge 1 ]]; then
-      "$bin/evaluate_trajectory" --est "$run/trajectory.txt" --gt "$clip/mav0/state_groundtruth_estimate0/data.csv" \
+      # The lock's own placement (not the written trajectory, which a later lock may move after
+      # a doubt).
+      "$bin/evaluate_trajectory" --est "$run/locks.txt" --gt "$clip/mav0/state_groundtruth_estimate0/data.csv" \
           --at "$at" --log-level warn | grep -E '^POSE_' >"$run/alignment.txt"
     fi
     # Indoors a request with a prior region is a pose fix (after the lock), one without it a
@@ -132,7 +137,9 @@ for run in sorted(glob.glob(os.path.join(out, "runs", "*"))):
         errs.append(em); degs.append(ed); times.append(after)
         within += after <= 5.0
     rows.append(f"| {os.path.basename(run)} | {e.get('LOCALISATION_REQUESTS', 'n/a')} | "
-                + (f"{after:.2f} | {100 * em:.1f} | {ed:.2f} | {'WRONG LOCK' if bad else 'ok'} |" if loc else "- | - | - | not localised |")
+                + (f"{after:.2f} | {100 * em:.1f} | {ed:.2f} | {'WRONG LOCK' if bad else 'ok'} |" if loc
+                   else "- | - | - | not localised (the filter never initialised) |" if e.get("INITIALIZED_AT_FRAME") == "-1"
+                   else "- | - | - | not localised |")
                 + f" {doubts} |")
 q = lambda v, p: sorted(v)[min(len(v) - 1, int(p * len(v)))] if v else float("nan")
 with open(os.path.join(out, "REPORT.md"), "w") as f:
@@ -140,7 +147,8 @@ with open(os.path.join(out, "REPORT.md"), "w") as f:
     f.write(f"Revision {rev}. Seed {seed}, {per} clips per shared trajectory of {duration} s (start offset {offset}), realistic preset, "
             "shipped configs (config/euroc.yaml, config/map_indoor.yaml), cloud_server + edge_client over Fast DDS on "
             "loopback in real time, no ground truth at run time. Command per clip in runs/*/command.txt; produced by "
-            "scripts/localisation_experiment.sh.\n\n")
+            "scripts/localisation_experiment.sh. Alignment error: the pose the first accepted answer placed at its own "
+            "frame (edge_client --lock-poses) against the truth there.\n\n")
     f.write(f"- localised correctly within 5 s of the filter's initialisation: **{within}/{n}** "
             f"({100.0 * within / max(n, 1):.0f} %)\n")
     f.write(f"- wrong locks (accepted more than 10 cm or 2 deg off): **{wrong}**\n")

@@ -43,6 +43,7 @@ struct Args {
   std::string dataset;
   std::string config;
   std::string output;
+  std::string lock_poses;  ///< --lock-poses: each lock's placed pose (empty: not written)
   std::string groundtruth;
   std::vector<std::string> overrides;
   bool no_map = false;
@@ -69,6 +70,9 @@ void add_options(CLI::App& app, Args& a) {
       ->check(CLI::ExistingFile);
   app.add_option("--output", a.output, "TUM trajectory to write (IMU pose in the map frame at each image)")
       ->required();
+  app.add_option("--lock-poses", a.lock_poses,
+                 "TUM file of the pose each accepted localisation placed at its own frame (map frame, never "
+                 "re-placed after a doubt)");
   app.add_flag("--no-map", a.no_map, "Plain stereo VIO without the cloud map");
   app.add_option("--dds-profile", a.dds_profile,
                  "Fast DDS profile (config/dds/loopback.xml, two_hosts.xml, ...)")
@@ -487,6 +491,12 @@ int run(const Args& a) {
   if (auto s = mrvs::io::write_tum_trajectory(a.output, out); !s.ok()) {
     fmt::print(stderr, "edge_client: error: {}\n", std::string(s.message()));
     return mrvs::kExitDataError;
+  }
+  if (!a.lock_poses.empty()) {
+    if (auto s = mrvs::io::write_tum_trajectory(a.lock_poses, report.poses.locks()); !s.ok()) {
+      fmt::print(stderr, "edge_client: error: --lock-poses: {}\n", std::string(s.message()));
+      return mrvs::kExitDataError;
+    }
   }
   print_report(report, wall);
   fmt::print("TRAJECTORY_FRAME: {}\n", mapped ? "map" : "odometry");

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <Eigen/Eigenvalues>
 
+#include "appearance.h"
 #include "correlative_search.h"
 #include "likelihood_grid.h"
 #include "map_surface.h"
@@ -69,27 +70,45 @@ std::string check_request(const Request& q, const LocaliserOptions& o) {
 }
 
 /// One point per cell of `cell` (the mean of the cell's points), then at most max_points of
-/// them, evenly spread over the list; deterministic.
-std::vector<Eigen::Vector3d> thin(const std::vector<Eigen::Vector3d>& points, double cell, int max_points) {
-  std::unordered_map<std::uint64_t, std::pair<Eigen::Vector3d, int>> cells;
+/// them, evenly spread over the list; deterministic. brightness (one per point, 0: none; or
+/// empty): when `thinned_brightness` is given, it gets each kept cell's mean brightness (0: none).
+std::vector<Eigen::Vector3d> thin(const std::vector<Eigen::Vector3d>& points, double cell, int max_points,
+                                  const std::vector<std::uint8_t>& brightness = {},
+                                  std::vector<float>* thinned_brightness = nullptr) {
+  struct Cell {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int count = 0;
+    double brightness_sum = 0.0;
+    int brightness_count = 0;
+  };
+  std::unordered_map<std::uint64_t, Cell> cells;
   std::vector<std::uint64_t> order;
-  for (const Eigen::Vector3d& p : points) {
+  const bool bright = brightness.size() == points.size();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
     const Eigen::Vector3i c = (p / cell).array().floor().cast<int>();
     const std::uint64_t key = mix64((static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) << 42) ^
                                     (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y())) << 21) ^
                                     static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z())));
-    auto [it, fresh] = cells.try_emplace(key, Eigen::Vector3d::Zero(), 0);
+    auto [it, fresh] = cells.try_emplace(key);
     if (fresh) order.push_back(key);
-    it->second.first += p;
-    ++it->second.second;
+    it->second.sum += p;
+    ++it->second.count;
+    if (bright && brightness[i] > 0) {
+      it->second.brightness_sum += brightness[i];
+      ++it->second.brightness_count;
+    }
   }
   std::vector<Eigen::Vector3d> out;
   const std::size_t n = order.size();
   const std::size_t m = std::min<std::size_t>(n, static_cast<std::size_t>(max_points));
   out.reserve(m);
+  if (thinned_brightness) thinned_brightness->assign(m, 0.0f);
   for (std::size_t i = 0; i < m; ++i) {
-    const auto& [sum, count] = cells[order[i * n / m]];
-    out.push_back(sum / count);
+    const Cell& c = cells[order[i * n / m]];
+    out.push_back(c.sum / c.count);
+    if (thinned_brightness && c.brightness_count > 0)
+      (*thinned_brightness)[i] = static_cast<float>(c.brightness_sum / c.brightness_count);
   }
   return out;
 }
@@ -112,6 +131,7 @@ double horizontal_reach(const std::vector<Eigen::Vector3d>& points) {
 struct Prepared {
   Eigen::Matrix3d R_g = Eigen::Matrix3d::Identity();  ///< odometry frame -> gravity-aligned
   std::vector<Eigen::Vector3d> coarse, fine;          ///< gravity-aligned, relative to the anchor
+  std::vector<float> fine_brightness;                 ///< per fine point, 0: none
   std::vector<SightLine> sight;                       ///< a sample of the points with a viewpoint
   double reach_m = 0.0;                               ///< horizontal, 95th percentile
   double height_m = 0.0;                              ///< largest |z|
@@ -141,7 +161,7 @@ Prepared prepare(const Request& q, const LocaliserOptions& o) {
   aligned.reserve(q.points.size());
   for (const Eigen::Vector3f& x : q.points) aligned.push_back(p.R_g * x.cast<double>());
   p.coarse = thin(aligned, o.coarse_resolution_m, o.coarse_max_points);
-  p.fine = thin(aligned, o.fine_voxel_m, o.fine_max_points);
+  p.fine = thin(aligned, o.fine_voxel_m, o.fine_max_points, q.brightness, &p.fine_brightness);
   p.sight = sight_lines(q, p.R_g, o.sight_lines);
   p.reach_m = horizontal_reach(p.coarse);
   for (const Eigen::Vector3d& x : p.coarse) p.height_m = std::max(p.height_m, std::abs(x.z()));
@@ -223,9 +243,11 @@ struct Refined {
   FineResult fine;
   double blocked = 0.0;                     ///< share of the lines of sight through the map's surfaces
   std::vector<std::uint8_t> blocked_lines;  ///< per line of sight: 1 through a surface
+  Appearance appearance;                    ///< the submap's brightness against the map's intensity
   /// What tells placements apart: the inliers on vertical surfaces (a floor fits anywhere at
   /// the right height) less blocked_weight times the share of the lines of sight the pose
-  /// makes pass through a surface. Additive, so that the best score also has the most evidence
+  /// makes pass through a surface, plus appearance_weight times the appearance correlation
+  /// (with appearance_min_points). Additive, so that the best score also has the most evidence
   /// of its own against any other pose (strongest_rival's ratio stays at most 1).
   double score = 0.0;
 };
@@ -242,7 +264,10 @@ Refined refine_one(const Localiser::Impl& m, const Prepared& p, const Likelihood
                   ? 0.0
                   : static_cast<double>(std::count(r.blocked_lines.begin(), r.blocked_lines.end(), 1)) /
                         static_cast<double>(p.sight.size());
+  r.appearance = appearance(m.surface, r.fine, p.fine_brightness);
   r.score = r.fine.structure - o.blocked_weight * r.blocked;
+  if (r.appearance.points >= o.appearance_min_points)
+    r.score += o.appearance_weight * r.appearance.correlation;
   return r;
 }
 
@@ -290,7 +315,21 @@ struct Discord {
   double other_only = 0.0;
 };
 
-Discord discord(const Refined& best, const Refined& other, double line_weight) {
+/// The appearance's share of the discord: a correlation difference beyond margin_sd standard
+/// errors (about 1 / sqrt(n) each), times the weight; none when either pose has too few points.
+void appearance_discord(const Refined& best, const Refined& other, const LocaliserOptions& o, Discord* d) {
+  const Appearance& a = best.appearance;
+  const Appearance& b = other.appearance;
+  if (o.appearance_weight <= 0.0 || a.points < o.appearance_min_points || b.points < o.appearance_min_points)
+    return;
+  const double margin = o.appearance_margin_sd * std::sqrt(1.0 / a.points + 1.0 / b.points);
+  const double diff = a.correlation - b.correlation;
+  d->best_only += o.appearance_weight * std::max(0.0, diff - margin);
+  d->other_only += o.appearance_weight * std::max(0.0, -diff - margin);
+}
+
+Discord discord(const Refined& best, const Refined& other, const LocaliserOptions& o) {
+  const double line_weight = o.blocked_weight;
   Discord d;
   const std::vector<float>& eb = best.fine.evidence;
   const std::vector<float>& eo = other.fine.evidence;
@@ -313,6 +352,7 @@ Discord discord(const Refined& best, const Refined& other, double line_weight) {
     d.best_only += line_weight * best_clear / static_cast<double>(lines);
     d.other_only += line_weight * other_clear / static_cast<double>(lines);
   }
+  appearance_discord(best, other, o, &d);
   return d;
 }
 
@@ -333,7 +373,7 @@ Rival strongest_rival(const std::vector<Refined>& refined, const LocaliserOption
   Rival rival;
   for (std::size_t k = 1; k < refined.size(); ++k) {
     if (same_pose(refined[k].pose, refined.front().pose, distinct)) continue;
-    const Discord d = discord(refined.front(), refined[k], o.blocked_weight);
+    const Discord d = discord(refined.front(), refined[k], o);
     const double a = d.best_only < o.min_discordance
                          ? 1.0
                          : std::min(1.0, (d.other_only + kFloor) / (d.best_only + kFloor));
@@ -380,17 +420,19 @@ Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p,
     r.status = LStatus::kAmbiguous;
     r.detail = fmt::format(
         "another pose {:.2f} m / {:.1f} deg away is told apart too weakly (ambiguity {:.2f}; structure "
-        "{:.2f} vs {:.2f}, lines of sight blocked: {:.0f} % vs {:.0f} %)",
+        "{:.2f} vs {:.2f}, lines of sight blocked: {:.0f} % vs {:.0f} %, appearance {:.2f} vs {:.2f})",
         (alt->pose.anchor - best.pose.anchor).norm(),
         yaw_difference(alt->pose.yaw, best.pose.yaw) * kRadToDeg, r.ambiguity, alt->fine.structure,
-        best.fine.structure, 100 * alt->blocked, 100 * best.blocked);
+        best.fine.structure, 100 * alt->blocked, 100 * best.blocked, alt->appearance.correlation,
+        best.appearance.correlation);
     return r;
   }
   r.status = LStatus::kOk;
   r.detail = fmt::format(
       "fitness {:.2f}, rmse {:.3f} m, ambiguity {:.2f}, sd {:.3f} m / {:.2f} deg, {:.0f} % of the "
-      "lines of sight blocked",
-      r.fitness, r.rmse_m, r.ambiguity, sigma_m, sigma_deg, 100 * best.blocked);
+      "lines of sight blocked, appearance {:.2f} ({} points)",
+      r.fitness, r.rmse_m, r.ambiguity, sigma_m, sigma_deg, 100 * best.blocked, best.appearance.correlation,
+      best.appearance.points);
   return r;
 }
 
@@ -493,10 +535,13 @@ StatusOr<Localiser> Localiser::create(std::shared_ptr<const map::VoxelMap> map, 
     impl->bounds.extend(p.position.cast<double>());
   }
   std::vector<Eigen::Vector3f> fine_points;
+  std::vector<float> fine_intensity;
   fine_points.reserve(map->levels[static_cast<std::size_t>(fine)].points.size());
-  for (const map::MapPoint& p : map->levels[static_cast<std::size_t>(fine)].points)
+  for (const map::MapPoint& p : map->levels[static_cast<std::size_t>(fine)].points) {
     fine_points.push_back(p.position);
-  impl->surface = MapSurface::build(std::move(fine_points), o.normal_knn, o.normal_max_rms_m);
+    fine_intensity.push_back(p.intensity);
+  }
+  impl->surface = MapSurface::build(std::move(fine_points), o.normal_knn, o.normal_max_rms_m, fine_intensity);
   const double res = o.coarse_resolution_m;
   const Eigen::AlignedBox3d whole(impl->bounds.min() - Eigen::Vector3d::Constant(2 * res),
                                   impl->bounds.max() + Eigen::Vector3d::Constant(2 * res));

@@ -36,10 +36,13 @@ MapSurface::~MapSurface() = default;
 MapSurface::MapSurface(MapSurface&&) noexcept = default;
 MapSurface& MapSurface::operator=(MapSurface&&) noexcept = default;
 
-MapSurface MapSurface::build(std::vector<Eigen::Vector3f> points, int knn, double max_rms_m) {
+MapSurface MapSurface::build(std::vector<Eigen::Vector3f> points, int knn, double max_rms_m,
+                             const std::vector<float>& intensity) {
   MapSurface s;
   s.points_ = std::move(points);
   s.normals_.assign(s.points_.size(), Eigen::Vector3f::Zero());
+  const bool smooth = intensity.size() == s.points_.size();
+  if (smooth) s.intensity_.assign(s.points_.size(), NAN);
   if (s.points_.empty()) return s;
   s.index_ = std::make_unique<Index>(s.points_);
   const std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(std::max(knn, 3)), s.points_.size());
@@ -50,6 +53,11 @@ MapSurface MapSurface::build(std::vector<Eigen::Vector3f> points, int knn, doubl
     const std::size_t n = s.index_->tree.knnSearch(s.points_[i].data(), k, idx.data(), d2.data());
     nb.clear();
     for (std::size_t j = 0; j < n; ++j) nb.push_back(s.points_[idx[j]].cast<double>());
+    if (smooth && n > 0) {
+      double sum = 0.0;
+      for (std::size_t j = 0; j < n; ++j) sum += intensity[idx[j]];
+      s.intensity_[i] = static_cast<float>(sum / static_cast<double>(n));
+    }
     const std::optional<PlaneFit> fit = fit_plane(nb);
     if (fit && fit->rms_m <= max_rms_m && fit->extent_m > 2.0 * fit->rms_m) {
       s.normals_[i] = fit->normal.cast<float>();

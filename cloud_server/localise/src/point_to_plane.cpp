@@ -40,14 +40,17 @@ struct NeighbourBounds {
   }
 };
 
-/// evidence: when given, filled with each point's structure weight (FineResult::evidence).
+/// evidence, matched: when given, filled with each point's structure weight and inlier match
+/// (FineResult::evidence, FineResult::matched).
 Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points, double yaw,
                      const Eigen::Vector3d& anchor, double max_distance, const FineOptions& o,
-                     NeighbourBounds* bounds, std::vector<float>* evidence = nullptr) {
+                     NeighbourBounds* bounds, std::vector<float>* evidence = nullptr,
+                     std::vector<std::int32_t>* matched = nullptr) {
   Linearised L;
   const double reach = o.inlier_m + o.voxel_m;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   if (evidence) evidence->assign(points.size(), 0.0f);
+  if (matched) matched->assign(points.size(), -1);
   const float max_radius = static_cast<float>(std::max(max_distance, reach));
   std::vector<float> found(points.size(), INFINITY);
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -62,6 +65,7 @@ Linearised linearise(const MapSurface& surface, const std::vector<Eigen::Vector3
     const bool inlier =
         planar ? nb->distance_m <= reach && std::abs(r) <= o.inlier_m : nb->distance_m <= o.inlier_m;
     L.inliers += inlier;
+    if (matched && inlier) (*matched)[i] = static_cast<std::int32_t>(nb->index);
     if (!planar || nb->distance_m > max_distance) continue;
     Row4 J;
     J.head<3>() = n.transpose();
@@ -117,8 +121,8 @@ FineResult refine_pose(const MapSurface& surface, const std::vector<Eigen::Vecto
     out.iterations = it + 1;
     if (s >= 1.0 && dx.head<3>().norm() < o.converged_m && std::abs(dx(3)) < o.converged_rad) break;
   }
-  const Linearised L =
-      linearise(surface, points, out.yaw, out.anchor, o.end_distance_m, o, &bounds, &out.evidence);
+  const Linearised L = linearise(surface, points, out.yaw, out.anchor, o.end_distance_m, o, &bounds,
+                                 &out.evidence, &out.matched);
   out.information = L.information;
   out.inliers = L.inliers;
   out.fitness = points.empty() ? 0.0 : static_cast<double>(L.inliers) / static_cast<double>(points.size());

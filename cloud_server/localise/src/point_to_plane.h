@@ -8,9 +8,11 @@
 // Pose: a submap point p (gravity-aligned, relative to the anchor) lies at
 //   x = R_z(yaw) p + anchor   (map-local),
 // and the error [d_anchor (3); d_yaw] perturbs it as x + d_anchor + d_yaw z x (x - anchor).
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "map_surface.h"
 
@@ -46,6 +48,9 @@ struct FineResult {
   /// Per point, in order: its share of `structure` (|n_xy| when an inlier with a normal, else
   /// 0). Two placements are told apart by the points that fit one and not the other.
   std::vector<float> evidence;
+  /// Per point, in order: its nearest map point (MapSurface index) when it is an inlier, else -1
+  /// (the appearance check compares the submap's brightness with the map's intensity there).
+  std::vector<std::int32_t> matched;
 };
 
 /// Refines (yaw, anchor) from the given start.

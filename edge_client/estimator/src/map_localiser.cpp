@@ -171,16 +171,22 @@ bool MapLocaliser::gathering(TimestampNs t_ns) const {
   return options_.track_interval_s > 0.0 && t_ns >= next_request_ns_ - from_seconds(window_s_);
 }
 
-void MapLocaliser::add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o,
-                              const Vec3d& viewpoint_o) {
-  if (!points_o.empty() && gathering(t_ns)) dense_.emplace_back(Seen{t_ns, viewpoint_o}, points_o);
+void MapLocaliser::add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o, const Vec3d& viewpoint_o,
+                              const std::vector<std::uint8_t>& brightness) {
+  if (!points_o.empty() && gathering(t_ns)) {
+    dense_.push_back({Seen{t_ns, viewpoint_o}, points_o,
+                      brightness.size() == points_o.size() ? brightness : std::vector<std::uint8_t>{}});
+  }
   last_dense_ns_ = t_ns;
 }
 
-void MapLocaliser::set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o,
-                                   const Vec3d& viewpoint_o) {
+void MapLocaliser::set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o, const Vec3d& viewpoint_o,
+                                   float brightness) {
   if (options_.submap_source == "dense_stereo" || !gathering(t_ns)) return;
-  tracks_[id] = {Seen{t_ns, viewpoint_o}, p_o};
+  TrackPoint& t = tracks_[id];
+  t.seen = Seen{t_ns, viewpoint_o};
+  t.p = p_o;
+  if (brightness > 0.0f) t.brightness = brightness;
 }
 
 bool MapLocaliser::wants_dense(TimestampNs t_ns) const {
@@ -189,9 +195,9 @@ bool MapLocaliser::wants_dense(TimestampNs t_ns) const {
 }
 
 void MapLocaliser::forget_before(TimestampNs t_ns) {
-  while (!dense_.empty() && dense_.front().first.t_ns < t_ns) dense_.pop_front();
+  while (!dense_.empty() && dense_.front().seen.t_ns < t_ns) dense_.pop_front();
   for (auto it = tracks_.begin(); it != tracks_.end();) {
-    it = it->second.first.t_ns < t_ns ? tracks_.erase(it) : std::next(it);
+    it = it->second.seen.t_ns < t_ns ? tracks_.erase(it) : std::next(it);
   }
 }
 
@@ -205,11 +211,13 @@ std::optional<localisation::Request> MapLocaliser::build_request(TimestampNs t_n
     Vec3d sum = Vec3d::Zero();
     int count = 0;
     std::int64_t view = 0;
+    double brightness_sum = 0.0;  ///< over the points with a brightness
+    int brightness_count = 0;
   };
   std::unordered_map<std::uint64_t, Cell> cells;
   std::vector<std::uint64_t> order;
   std::map<std::int64_t, Vec3d> views;
-  auto add = [&](const Seen& seen, const Vec3d& p) {
+  auto add = [&](const Seen& seen, const Vec3d& p, float brightness) {
     if (seen.t_ns < from || !p.allFinite() || (p - anchor_o).norm() > options_.max_range_m) return;
     const std::int64_t view = (seen.t_ns - from) / bucket;
     views.try_emplace(view, seen.viewpoint_o);
@@ -217,29 +225,39 @@ std::optional<localisation::Request> MapLocaliser::build_request(TimestampNs t_n
     if (fresh) order.push_back(it->first);
     it->second.sum += p;
     ++it->second.count;
+    if (brightness > 0.0f) {
+      it->second.brightness_sum += brightness;
+      ++it->second.brightness_count;
+    }
   };
-  for (const auto& [seen, pts] : dense_) {
-    for (const Vec3d& p : pts) add(seen, p);
+  for (const DensePoints& d : dense_) {
+    for (std::size_t i = 0; i < d.points.size(); ++i)
+      add(d.seen, d.points[i], d.brightness.empty() ? 0.0f : d.brightness[i]);
   }
-  for (const auto& [id, sp] : tracks_) add(sp.first, sp.second);
+  for (const auto& [id, t] : tracks_) add(t.seen, t.p, t.brightness);
   if (static_cast<int>(order.size()) < options_.min_points) return std::nullopt;
   // At most max_points, evenly spread, then grouped by viewpoint (the wire's order).
   const std::size_t n = order.size();
   const std::size_t m = std::min<std::size_t>(n, static_cast<std::size_t>(options_.max_points));
-  std::map<std::int64_t, std::vector<Vec3d>> by_view;
+  std::map<std::int64_t, std::vector<const Cell*>> by_view;
   for (std::size_t i = 0; i < m; ++i) {
     const Cell& c = cells.at(order[i * n / m]);
-    by_view[c.view].push_back(c.sum / c.count);
+    by_view[c.view].push_back(&c);
   }
   localisation::Request q;
   q.stamp_ns = t_ns;
   q.anchor_o = anchor_o;
   q.gravity_o = Vec3d(0, 0, -1);  // the filter's world frame is gravity-aligned
   q.points.reserve(m);
-  for (const auto& [view, pts] : by_view) {
-    for (const Vec3d& p : pts) q.points.push_back((p - anchor_o).cast<float>());
+  q.brightness.reserve(m);
+  for (const auto& [view, run] : by_view) {
+    for (const Cell* c : run) {
+      q.points.push_back((c->sum / c->count - anchor_o).cast<float>());
+      const double b = c->brightness_count > 0 ? c->brightness_sum / c->brightness_count : 0.0;
+      q.brightness.push_back(static_cast<std::uint8_t>(std::clamp(std::lround(b), 0L, 255L)));
+    }
     q.viewpoints.push_back(
-        {(views.at(view) - anchor_o).cast<float>(), static_cast<std::uint32_t>(pts.size())});
+        {(views.at(view) - anchor_o).cast<float>(), static_cast<std::uint32_t>(run.size())});
   }
   return q;
 }

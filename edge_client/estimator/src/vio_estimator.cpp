@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <set>
+#include <unordered_map>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -346,13 +347,14 @@ bool VioEstimator::wants_dense_submap(TimestampNs t_cam_ns) const {
   return state_ && localises() && localiser_.active() && localiser_.wants_dense(t_cam_ns);
 }
 
-void VioEstimator::add_dense_submap(TimestampNs t_cam_ns, const std::vector<Eigen::Vector3f>& points_c0) {
+void VioEstimator::add_dense_submap(TimestampNs t_cam_ns, const std::vector<Eigen::Vector3f>& points_c0,
+                                    const std::vector<std::uint8_t>& brightness) {
   if (!state_ || state_->clones.count(t_cam_ns) == 0) return;
   const SE3d T_w_c = state_->T_w_c(t_cam_ns, 0);
   std::vector<Vec3d> points_w;
   points_w.reserve(points_c0.size());
   for (const Eigen::Vector3f& p : points_c0) points_w.push_back(T_w_c * p.cast<double>());
-  localiser_.add_points(t_cam_ns, points_w, T_w_c.translation());
+  localiser_.add_points(t_cam_ns, points_w, T_w_c.translation(), brightness);
 }
 
 void VioEstimator::localise(const FeatureFrame& frame,
@@ -360,8 +362,14 @@ void VioEstimator::localise(const FeatureFrame& frame,
   State& s = *state_;
   if (localiser_.gathering(frame.t_ns)) {
     const Vec3d camera = s.T_w_c(frame.t_ns, 0).translation();
-    for (const auto& [id, p] : triangulated) localiser_.set_track_point(id, frame.t_ns, p, camera);
-    for (const auto& [id, p] : s.points) localiser_.set_track_point(id, frame.t_ns, p.p_w, camera);
+    std::unordered_map<FeatureId, float> brightness;  // of the features seen in this frame
+    for (const FeatureObservation& f : frame.features) brightness[f.id] = f.brightness;
+    auto seen = [&](FeatureId id) {
+      const auto it = brightness.find(id);
+      return it == brightness.end() ? 0.0f : it->second;
+    };
+    for (const auto& [id, p] : triangulated) localiser_.set_track_point(id, frame.t_ns, p, camera, seen(id));
+    for (const auto& [id, p] : s.points) localiser_.set_track_point(id, frame.t_ns, p.p_w, camera, seen(id));
   }
   run_path_m_ += (s.imu.p_w_b - run_last_p_).norm();
   run_last_p_ = s.imu.p_w_b;

@@ -159,7 +159,8 @@ StatusOr<int> checked_disparities(const DenseStereoOptions& o, const StereoRecti
 }
 
 /// Keeps `max` of `points` (all when fewer): the floor(i n / max)-th for i = 0 .. max - 1.
-void thin_evenly(std::size_t max, std::vector<Eigen::Vector3f>* points) {
+template <class T>
+void thin_evenly(std::size_t max, std::vector<T>* points) {
   const std::size_t n = points->size();
   if (n <= max) return;
   // Index i * n / max >= i: every point is read before its slot is overwritten.
@@ -290,11 +291,21 @@ StatusOr<cv::Mat> DenseStereo::texture_mask(const cv::Mat& left) const {
   return mask;
 }
 
-StatusOr<std::vector<Eigen::Vector3f>> DenseStereo::points(const cv::Mat& left, const cv::Mat& right) const {
+StatusOr<std::vector<Eigen::Vector3f>> DenseStereo::points(const cv::Mat& left, const cv::Mat& right,
+                                                           std::vector<std::uint8_t>* brightness) const {
   using Pair = std::array<cv::Mat, 2>;
   MRVS_ASSIGN_OR_RETURN(const Pair rectified, rectify(left, right));
   MRVS_ASSIGN_OR_RETURN(const cv::Mat disp, disparity(rectified));
   MRVS_ASSIGN_OR_RETURN(const cv::Mat textured, texture_mask(rectified[0]));
+  cv::Mat smooth;  // the brightness around each pixel: a 3 x 3 box at the level (6 x 6 raw pixels at 2)
+  if (brightness) {
+    brightness->clear();
+    try {
+      cv::blur(rectified[0], smooth, cv::Size(3, 3));
+    } catch (const cv::Exception& e) {
+      return absl::InternalError(fmt::format("dense stereo: brightness blur failed: {}", e.what()));
+    }
+  }
   const int step = options_.pixel_step;
   const double fb = rect_.f * rect_.baseline_m;
   const double bias16 = options_.matcher == "bm" ? kBmRoundingBias : 0.0;
@@ -313,9 +324,13 @@ StatusOr<std::vector<Eigen::Vector3f>> DenseStereo::points(const cv::Mat& left, 
       const Vec3d p_c0 = rect_.R_c0_r * Vec3d((u - rect_.cx) * z / rect_.f, (v - rect_.cy) * z / rect_.f, z);
       if (p_c0.z() < options_.min_depth_m || p_c0.z() > options_.max_depth_m) continue;
       out.push_back(p_c0.cast<float>());
+      if (brightness) brightness->push_back(std::max<std::uint8_t>(1, smooth.at<std::uint8_t>(v, u)));
     }
   }
-  if (options_.max_points > 0) thin_evenly(static_cast<std::size_t>(options_.max_points), &out);
+  if (options_.max_points > 0) {
+    thin_evenly(static_cast<std::size_t>(options_.max_points), &out);
+    if (brightness) thin_evenly(static_cast<std::size_t>(options_.max_points), brightness);
+  }
   return out;
 }
 

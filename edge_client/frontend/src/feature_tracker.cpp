@@ -295,6 +295,22 @@ void FeatureTracker::detect(const cv::Mat& equalized, std::vector<Track>* tracks
   stats->created = static_cast<int>(tracks->size() - std::min(before, tracks->size()));
 }
 
+namespace {
+
+/// Mean of the (2 kPatchHalf + 1)^2 pixels of the input image (not equalised: the same scene
+/// brightness gives the same value in every frame) around uv, clipped at the border, 1-255: the
+/// feature's appearance for the localisation submap (FeatureObservation::brightness).
+float patch_brightness(const cv::Mat& image, const Vec2d& uv) {
+  constexpr int kPatchHalf = 3;
+  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
+  const cv::Rect patch = cv::Rect(u - kPatchHalf, v - kPatchHalf, 2 * kPatchHalf + 1, 2 * kPatchHalf + 1) &
+                         cv::Rect(0, 0, image.cols, image.rows);
+  if (patch.area() == 0) return 0.0f;
+  return std::max(1.0f, static_cast<float>(cv::mean(image(patch))[0]));
+}
+
+}  // namespace
+
 std::vector<FeatureObservation> FeatureTracker::match_stereo(const std::vector<cv::Mat>& left_pyr,
                                                              const std::vector<cv::Mat>& right_pyr,
                                                              std::vector<Track>* tracks,
@@ -394,6 +410,7 @@ StatusOr<TrackedFrame> FeatureTracker::process(TimestampNs t_ns, const cv::Mat& 
   frame.timing.detection_ms = ms_since(t2) - detect_image_ms;
   const Clock::time_point t3 = Clock::now();
   frame.features = match_stereo(img.left_pyr, img.right_pyr, &tracks, &stats);
+  for (FeatureObservation& o : frame.features) o.brightness = patch_brightness(left, o.uv_left);
   frame.timing.stereo_ms = ms_since(t3);
   frame.timing.image_ms += detect_image_ms;
   frame.timing.tracking_ms = ms_since(t1) - detect_image_ms;

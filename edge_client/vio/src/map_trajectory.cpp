@@ -29,6 +29,7 @@ void MapTrajectory::add(int run, const io::StampedPose& pose, bool in_map_frame,
     for (const io::StampedPose& p : held_) trajectory_.push_back({p.t_ns, *T_m_o * p.T_w_b});
     held_.clear();
   }
+  if (T_m_o && in_map_frame) locks_.push_back(pose);
   if (in_map_frame) {
     trajectory_.push_back(pose);
   } else {

@@ -27,9 +27,10 @@ StatusOr<StereoOutput> VioSystem::feed_stereo(TimestampNs t_ns, const cv::Mat& l
   MRVS_ASSIGN_OR_RETURN(out.estimate, estimator_.feed_frame(frame));
   if (dense_ && estimator_.wants_dense_submap(t_ns)) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto points = dense_->points(left, right);
+    std::vector<std::uint8_t> brightness;
+    auto points = dense_->points(left, right, &brightness);
     if (points.ok()) {
-      estimator_.add_dense_submap(t_ns, *points);
+      estimator_.add_dense_submap(t_ns, *points, brightness);
     } else {
       spdlog::warn("dense stereo at {} ns: {}", t_ns, std::string(points.status().message()));
     }

@@ -108,7 +108,9 @@ wire::LocalisationRequest encode_localisation_request(std::uint32_t client_id, c
   }
   std::size_t left_out = 0;
   w.points().reserve(std::min<std::size_t>(q.points.size(), wire::MAX_SUBMAP_POINTS));
-  for (const Eigen::Vector3f& p : q.points) {
+  const bool bright = q.brightness.size() == q.points.size();
+  for (std::size_t i = 0; i < q.points.size(); ++i) {
+    const Eigen::Vector3f& p = q.points[i];
     const Eigen::Array3f k = (p / quantum_m).array().round();
     if (!k.allFinite() || (k.abs() > 32767.0f).any() || w.points().size() >= wire::MAX_SUBMAP_POINTS) {
       ++left_out;
@@ -118,6 +120,7 @@ wire::LocalisationRequest encode_localisation_request(std::uint32_t client_id, c
     s.xyz({static_cast<std::int16_t>(k.x()), static_cast<std::int16_t>(k.y()),
            static_cast<std::int16_t>(k.z())});
     w.points().push_back(s);
+    if (bright) w.brightness().push_back(q.brightness[i]);
   }
   if (dropped) *dropped = left_out;
   encode_viewpoints(q, left_out == 0, &w);
@@ -152,6 +155,12 @@ StatusOr<localisation::Request> decode_localisation_request(const wire::Localisa
   for (const wire::SubmapPoint& s : w.points()) {
     q.points.emplace_back(Eigen::Vector3f(s.xyz()[0], s.xyz()[1], s.xyz()[2]) * w.quantum_m());
   }
+  if (!w.brightness().empty() && w.brightness().size() != w.points().size()) {
+    return absl::InvalidArgumentError(
+        fmt::format("{} brightness values for {} points (one per point, or none)", w.brightness().size(),
+                    w.points().size()));
+  }
+  q.brightness.assign(w.brightness().begin(), w.brightness().end());
   if (w.viewpoints().size() > wire::MAX_VIEWPOINTS) {
     return absl::InvalidArgumentError(
         fmt::format("{} viewpoints, at most {}", w.viewpoints().size(), wire::MAX_VIEWPOINTS));

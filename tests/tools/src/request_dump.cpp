@@ -34,7 +34,15 @@ Status write_request_dump(const std::string& dir, const localisation::Request& q
   if (q.prior)
     fmt::print(f, "PRIOR {:.17g} {:.17g} {:.17g} {:.17g}\n", q.prior->centre_m.x(), q.prior->centre_m.y(),
                q.prior->centre_m.z(), q.prior->radius_m);
-  for (const auto& p : q.points) fmt::print(f, "P {} {} {}\n", p.x(), p.y(), p.z());
+  const bool bright = q.brightness.size() == q.points.size();
+  for (std::size_t i = 0; i < q.points.size(); ++i) {
+    const Eigen::Vector3f& p = q.points[i];
+    if (bright) {
+      fmt::print(f, "P {} {} {} {}\n", p.x(), p.y(), p.z(), q.brightness[i]);
+    } else {
+      fmt::print(f, "P {} {} {}\n", p.x(), p.y(), p.z());
+    }
+  }
   for (const auto& v : q.viewpoints)
     fmt::print(f, "V {} {} {} {}\n", v.position.x(), v.position.y(), v.position.z(), v.count);
   const bool ok = std::fclose(f) == 0;
@@ -70,12 +78,16 @@ StatusOr<DumpedRequest> read_request_dump(const std::string& path) {
       d.request.prior = localisation::PriorRegion{{x, y, z}, w};
     } else if (key == "P") {
       d.request.points.emplace_back(x, y, z);
+      if (has_w) d.request.brightness.push_back(static_cast<std::uint8_t>(std::clamp(w, 0.0, 255.0)));
     } else if (key == "V") {
       d.request.viewpoints.push_back({Eigen::Vector3f(x, y, z), has_w ? static_cast<std::uint32_t>(w) : 0u});
     }
   }
   if (true_rows != 4) return absl::DataLossError(fmt::format("{}: no TRUE pose (4 rows)", path));
   if (d.request.points.empty()) return absl::DataLossError(fmt::format("{}: no points (P lines)", path));
+  if (!d.request.brightness.empty() && d.request.brightness.size() != d.request.points.size())
+    return absl::DataLossError(fmt::format("{}: {} of {} P lines have a brightness (all or none)", path,
+                                           d.request.brightness.size(), d.request.points.size()));
   d.truth = SE3d::from_matrix(t);
   d.answer = answer_rows == 4 ? SE3d::from_matrix(a) : SE3d();
   return d;

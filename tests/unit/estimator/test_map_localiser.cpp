@@ -119,6 +119,48 @@ TEST(MapLocaliser, TwoAgreeingAnswersFromNewDataPlaceTheFilter) {
   EXPECT_EQ(a->anchor_m, T * q.anchor_o);
 }
 
+// Each submap point carries its cell's mean brightness (0 where nothing in it had one); a
+// track not seen in a frame keeps the brightness it was last seen with.
+TEST(MapLocaliser, TheRequestCarriesEachCellsMeanBrightness) {
+  ScriptedCloud cloud;
+  LocalisationOptions o = options();  // 5 cm cells
+  MapLocaliser loc(o);
+  const TimestampNs t0 = 10 * kSecond;
+  for (TimestampNs t = t0; t <= t0 + kSecond; t += kSecond / 20) {
+    std::vector<Vec3d> pts;
+    std::vector<std::uint8_t> grey;
+    for (int i = 0; i < 30; ++i) {
+      pts.emplace_back(3.0, 0.2 * i + 0.12, 0.12);  // cell i: 100 + i, and in cell 0 also 120
+      grey.push_back(static_cast<std::uint8_t>(100 + i));
+    }
+    pts.emplace_back(3.0, 0.13, 0.13);
+    grey.push_back(120);
+    pts.emplace_back(3.0, -1.0, 0.1);  // a cell without brightness
+    grey.push_back(0);
+    loc.add_points(t, pts, Vec3d(0.0, 0.0, 1.0), grey);
+    // A track seen with brightness 60 in the first frame only, then without.
+    loc.set_track_point(7, t, Vec3d(3.0, 6.5, 0.1), Vec3d(0.0, 0.0, 1.0), t == t0 ? 60.0f : 0.0f);
+    LocalisationFrameStats stats;
+    loc.step(t, Vec3d(0.0, 0.0, 1.0), std::nullopt, cloud, &stats);
+  }
+  ASSERT_EQ(cloud.sent.size(), 1u);
+  const localisation::Request& q = cloud.sent[0];
+  ASSERT_EQ(q.brightness.size(), q.points.size());
+  ASSERT_EQ(q.points.size(), 32u);
+  for (std::size_t k = 0; k < q.points.size(); ++k) {
+    const Vec3d p = q.points[k].cast<double>() + q.anchor_o;
+    const int brightness = q.brightness[k];
+    if (std::abs(p.y() - 6.5) < 0.01) {
+      EXPECT_EQ(brightness, 60) << k;  // the track kept its last seen brightness
+    } else if (p.y() < 0.0) {
+      EXPECT_EQ(brightness, 0) << k;  // not known
+    } else {
+      const int cell = static_cast<int>(std::lround((p.y() - 0.12) / 0.2));
+      EXPECT_EQ(brightness, cell == 0 ? 110 : 100 + cell) << k;  // cell 0: (100 + 120) / 2
+    }
+  }
+}
+
 // A submap is dated from the run's first frame when its window reaches back before it: with
 // a 3 s window, the answers at 1, 2 and 3 s all hold the first second's data and none is
 // independent of the first; the one at 4 s is (its data begins at 1 s).

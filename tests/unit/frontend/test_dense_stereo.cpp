@@ -326,5 +326,47 @@ TEST(DenseStereo, OutputIsDeterministicAndThinnedToMaxPoints) {
   for (std::size_t i = 0; i < a->size(); ++i) ASSERT_EQ((*a)[i], (*every)[i * n / 1000]) << i;
 }
 
+// Each point's brightness is the image around it: it follows the rendered texture at the
+// point (30 + 190 texture, blurred by the 3 x 3 level box), and it is thinned with the points.
+TEST(DenseStereo, BrightnessFollowsTheTextureAtEachPointAndIsThinnedWithIt) {
+  const config::StereoRigCalibration rig = synthetic_rig(DistortionModel::kRadTan);
+  const TexturedPlane plane{Vec3d(0.0, 0.0, 2.0), Vec3d(0.1, -0.1, 1.0).normalized(), 0.08};
+  const cv::Mat left = render_plane(rig, 0, plane), right = render_plane(rig, 1, plane);
+  DenseStereoOptions o;
+  o.max_points = 0;
+  auto all = DenseStereo::create(o, rig);
+  ASSERT_TRUE(all.ok()) << all.status();
+  std::vector<std::uint8_t> brightness;
+  auto every = all->points(left, right, &brightness);
+  ASSERT_TRUE(every.ok());
+  ASSERT_EQ(brightness.size(), every->size());
+  ASSERT_GT(every->size(), 2000u);
+  double sum_abs = 0.0, sxy = 0.0, sxx = 0.0, syy = 0.0, mx = 0.0, my = 0.0;
+  const double n = static_cast<double>(every->size());
+  std::vector<double> expected;
+  for (const Eigen::Vector3f& p : *every) expected.push_back(30.0 + 190.0 * plane.texture(p.cast<double>()));
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    mx += expected[i] / n;
+    my += brightness[i] / n;
+    sum_abs += std::abs(expected[i] - brightness[i]);
+  }
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    sxy += (expected[i] - mx) * (brightness[i] - my);
+    sxx += (expected[i] - mx) * (expected[i] - mx);
+    syy += (brightness[i] - my) * (brightness[i] - my);
+  }
+  EXPECT_GT(sxy / std::sqrt(sxx * syy), 0.9);
+  EXPECT_LT(sum_abs / n, 12.0);
+  for (std::uint8_t b : brightness) ASSERT_GE(b, 1);  // 0 means "not known"
+  o.max_points = 1000;
+  auto thinned = DenseStereo::create(o, rig);
+  ASSERT_TRUE(thinned.ok());
+  std::vector<std::uint8_t> kept;
+  auto some = thinned->points(left, right, &kept);
+  ASSERT_TRUE(some.ok());
+  ASSERT_EQ(kept.size(), 1000u);
+  for (std::size_t i = 0; i < kept.size(); ++i) ASSERT_EQ(kept[i], brightness[i * every->size() / 1000]) << i;
+}
+
 }  // namespace
 }  // namespace mrvs::edge

@@ -250,6 +250,35 @@ TEST(FeatureTracker, TrackLengthsAndIdsAreStable) {
   EXPECT_GE(quantile(final_lengths, 0.5), 4.0);  // 20 Hz indoor: tracks last several frames
 }
 
+TEST(FeatureTracker, EachFeatureCarriesTheBrightnessAroundIt) {
+  const test::TestSequence* seq = test::sequence(SceneProfile::kIndoor, "easy", kIndoorFrames);
+  ASSERT_NE(seq, nullptr);
+  const auto tracked = test::run_tracker(*seq, test::tracker_options(SceneProfile::kIndoor), seq->images);
+  ASSERT_EQ(tracked.size(), seq->images.size());
+  int checked = 0;
+  for (std::size_t f = 0; f < tracked.size(); ++f) {
+    const cv::Mat& left = seq->images[f][0];
+    for (const FeatureObservation& o : tracked[f].features) {
+      // The 7 x 7 pixels around the rounded pixel, summed by hand.
+      const int u = static_cast<int>(std::lround(o.uv_left.x())),
+                v = static_cast<int>(std::lround(o.uv_left.y()));
+      double sum = 0.0;
+      int n = 0;
+      for (int dv = -3; dv <= 3; ++dv) {
+        for (int du = -3; du <= 3; ++du) {
+          if (u + du < 0 || v + dv < 0 || u + du >= left.cols || v + dv >= left.rows) continue;
+          sum += left.at<std::uint8_t>(v + dv, u + du);
+          ++n;
+        }
+      }
+      ASSERT_GT(n, 0);
+      ASSERT_NEAR(o.brightness, std::max(1.0, sum / n), 1e-3) << f << " " << o.id;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 1000);
+}
+
 TEST(FeatureTracker, WrongImageSizeOrTypeOrTimeIsAClearErrorAndStateIsKept) {
   const test::TestSequence* seq = test::sequence(SceneProfile::kIndoor, "easy", kIndoorFrames);
   ASSERT_NE(seq, nullptr);

@@ -20,7 +20,11 @@ localisation::Request sample_request(int n, float spread) {
   q.prior = localisation::PriorRegion{Vec3d(332001.5, 4140002.25, 20.5), 15.0};
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-spread, spread);
-  for (int i = 0; i < n; ++i) q.points.emplace_back(u(rng), u(rng), u(rng));
+  std::uniform_int_distribution<int> grey(0, 255);
+  for (int i = 0; i < n; ++i) {
+    q.points.emplace_back(u(rng), u(rng), u(rng));
+    q.brightness.push_back(static_cast<std::uint8_t>(grey(rng)));
+  }
   return q;
 }
 
@@ -46,18 +50,31 @@ TEST(LocalisationCodec, RequestRoundTripWithinHalfAQuantum) {
   }
   EXPECT_LE(worst, 0.0025f + 1e-5f);
   EXPECT_GT(worst, 0.001f);  // it is quantised
+  EXPECT_EQ(d->brightness, q.brightness);
   EXPECT_EQ(payload_bytes(w),
-            payload_bytes(encode_localisation_request(7, localisation::Request{}, 0.005f)) + 6 * 3000);
+            payload_bytes(encode_localisation_request(7, localisation::Request{}, 0.005f)) + 7 * 3000);
+  auto plain = q;  // no brightness: none on the wire, none decoded
+  plain.brightness.clear();
+  const auto wp = encode_localisation_request(7, plain, 0.005f);
+  EXPECT_TRUE(wp.brightness().empty());
+  EXPECT_TRUE(decode_localisation_request(wp)->brightness.empty());
 }
 
 TEST(LocalisationCodec, PointsOutOfRangeOrBeyondTheBoundAreLeftOutAndCounted) {
   auto q = sample_request(10, 1.0f);
-  q.points.emplace_back(200.0f, 0.0f, 0.0f);  // beyond 32767 * 5 mm
+  q.points.insert(q.points.begin() + 3, Eigen::Vector3f(200.0f, 0.0f, 0.0f));  // beyond 32767 * 5 mm
+  q.brightness.insert(q.brightness.begin() + 3, 7);
   q.points.emplace_back(0.0f, std::nanf(""), 0.0f);
+  q.brightness.push_back(9);
   std::size_t dropped = 0;
   auto w = encode_localisation_request(1, q, 0.005f, &dropped);
   EXPECT_EQ(dropped, 2u);
   EXPECT_EQ(w.points().size(), 10u);
+  // The brightness of the points left out goes too: the others keep theirs.
+  auto kept = q.brightness;
+  kept.pop_back();
+  kept.erase(kept.begin() + 3);
+  EXPECT_EQ(w.brightness(), kept);
   q = sample_request(wire::MAX_SUBMAP_POINTS + 5, 1.0f);
   w = encode_localisation_request(1, q, 0.005f, &dropped);
   EXPECT_EQ(dropped, 5u);
@@ -84,6 +101,11 @@ TEST(LocalisationCodec, MalformedRequestsAreRefusedByName) {
   w = good;
   w.points().resize(wire::MAX_SUBMAP_POINTS + 1);
   EXPECT_FALSE(decode_localisation_request(w).ok());
+  w = good;
+  w.brightness().pop_back();  // not one per point
+  d = decode_localisation_request(w);
+  ASSERT_FALSE(d.ok());
+  EXPECT_NE(std::string(d.status().message()).find("brightness"), std::string::npos) << d.status();
 }
 
 TEST(LocalisationCodec, ReplyRoundTrip) {
@@ -123,7 +145,7 @@ TEST(LocalisationCodec, CorruptRepliesAreDataLoss) {
   w.rotation({0.0, 0.0, 0.5, 0.5});  // not a unit quaternion
   EXPECT_EQ(decode_localisation_reply(w).status().code(), absl::StatusCode::kDataLoss);
   w = encode_localisation_reply(request, r);
-  w.protocol_version(2);
+  w.protocol_version(wire::LOCALISATION_PROTOCOL_VERSION + 1);
   EXPECT_EQ(decode_localisation_reply(w).status().code(), absl::StatusCode::kDataLoss);
   w = encode_localisation_reply(request, r);
   w.status(static_cast<wire::LocalisationStatus>(77));

@@ -58,9 +58,29 @@ Scene cluttered_room(int boxes, std::uint64_t seed) {
   return s;
 }
 
+float blob_albedo(const Eigen::Vector3d& p) {
+  constexpr double kCell = 0.15;
+  const Eigen::Vector3d g = p / kCell;
+  const Eigen::Vector3d f = g.array() - g.array().floor();
+  const Eigen::Vector3i c = g.array().floor().cast<int>();
+  auto lattice = [&](int dx, int dy, int dz) {
+    const std::uint64_t key =
+        mix64((static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x() + dx)) << 42) ^
+              (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y() + dy)) << 21) ^
+              static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z() + dz)));
+    return static_cast<double>(key >> 11) / static_cast<double>(1ULL << 53);
+  };
+  double v = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const int dx = k & 1, dy = (k >> 1) & 1, dz = (k >> 2) & 1;
+    v += lattice(dx, dy, dz) * (dx ? f.x() : 1 - f.x()) * (dy ? f.y() : 1 - f.y()) * (dz ? f.z() : 1 - f.z());
+  }
+  return static_cast<float>(0.1 + 0.8 * v);
+}
+
 std::shared_ptr<map::VoxelMap> voxelise(const std::vector<Eigen::Vector3d>& points,
-                                        const std::vector<double>& resolutions,
-                                        const Eigen::Vector3d& origin) {
+                                        const std::vector<double>& resolutions, const Eigen::Vector3d& origin,
+                                        float (*albedo)(const Eigen::Vector3d&)) {
   auto m = std::make_shared<map::VoxelMap>();
   m->origin = origin;
   for (double r : resolutions) {
@@ -72,7 +92,7 @@ std::shared_ptr<map::VoxelMap> voxelise(const std::vector<Eigen::Vector3d>& poin
       const auto v = map::voxel_of(local, r);
       if (!v) continue;
       if (!seen.insert(voxel::pack(*v)).second) continue;
-      level.points.push_back({local, 0.5f, 0.0f});
+      level.points.push_back({local, albedo ? albedo(p) : 0.5f, 0.0f});
     }
     m->levels.push_back(std::move(level));
   }
@@ -99,6 +119,19 @@ localisation::Request submap_request(const std::vector<Eigen::Vector3d>& samples
     q.points.push_back((T_o_m * noisy - q.anchor_o).cast<float>());
   }
   return q;
+}
+
+void add_brightness(localisation::Request* q, const SE3d& T_o_m, float (*albedo)(const Eigen::Vector3d&),
+                    std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 3.0);
+  const SE3d T_m_o = T_o_m.inverse();
+  q->brightness.clear();
+  for (const Eigen::Vector3f& x : q->points) {
+    const Eigen::Vector3d p_m = T_m_o * (x.cast<double>() + q->anchor_o);
+    const double b = 20.0 + 200.0 * std::pow(albedo(p_m), 0.6) + noise(rng);
+    q->brightness.push_back(static_cast<std::uint8_t>(std::clamp(std::lround(b), 1L, 255L)));
+  }
 }
 
 SE3d yaw_pose(double yaw, const Eigen::Vector3d& t) {

@@ -3,6 +3,9 @@
 // half turn) answers "ambiguous"; one wall answers "too little structure"; a submap of another
 // place answers "outside the map"; malformed requests answer "bad request"; a prior region
 // that misses the map answers "outside the map"; a map origin far from zero changes nothing.
+#include <algorithm>
+#include <random>
+
 #include <gtest/gtest.h>
 
 #include "localise_scene.h"
@@ -69,6 +72,36 @@ TEST(Localiser, ABareRectangularRoomIsAmbiguous) {
   const auto r = loc.localise(q);
   EXPECT_EQ(r.status, Status::kAmbiguous) << r.detail;
   EXPECT_GT(r.ambiguity, 0.9);
+}
+
+TEST(Localiser, TextureTellsABareRoomsHalfTurnApart) {
+  test::Scene scene;  // the bare room again, its surfaces textured (the map's intensity)
+  const auto samples = scene.sample(0.01);
+  const auto map = test::voxelise(samples, {0.03, 0.1}, Eigen::Vector3d::Zero(), test::blob_albedo);
+  LocaliserOptions o;
+  o.appearance_weight = 0.5;
+  const Localiser loc = make(map, o);
+  const SE3d T_o_m = test::yaw_pose(1.0, {1, 1, 0});
+  auto q = test::submap_request(samples, {4.3, 3.2, 1.4}, 4.0, 4000, 0.01, T_o_m, 3);
+  test::add_brightness(&q, T_o_m, test::blob_albedo, 4);
+  const auto r = loc.localise(q);
+  ASSERT_EQ(r.status, Status::kOk) << r.detail;
+  const Error e = pose_error(r.T_m_o, T_o_m.inverse(), q.anchor_o);
+  EXPECT_LT(e.m, 0.03);
+  EXPECT_LT(e.deg, 0.5);
+  EXPECT_LT(r.ambiguity, 0.2);
+  // Geometry alone cannot: ambiguous.
+  const auto geometry_only = make(map).localise(q);
+  EXPECT_EQ(geometry_only.status, Status::kAmbiguous) << geometry_only.detail;
+  // Brightness unrelated to the map (shuffled): still ambiguous, never a confident pose.
+  auto shuffled = q;
+  std::mt19937 rng(9);
+  std::shuffle(shuffled.brightness.begin(), shuffled.brightness.end(), rng);
+  const auto r_shuffled = loc.localise(shuffled);
+  EXPECT_EQ(r_shuffled.status, Status::kAmbiguous) << r_shuffled.detail;
+  // A map without intensity (constant) tells nothing either.
+  const auto untextured = make(test::voxelise(samples, {0.03, 0.1}), o).localise(q);
+  EXPECT_EQ(untextured.status, Status::kAmbiguous) << untextured.detail;
 }
 
 TEST(Localiser, OneWallIsTooLittleStructure) {

@@ -53,6 +53,9 @@ TEST(RequestDump, ReadsBackWhatWasWritten) {
   q.gravity_o = Eigen::Vector3d(0.1, 0.0, -1.0).normalized();
   q.prior = localisation::PriorRegion{{350000.5, 5800000.25, 40.0}, 12.5};
   q.viewpoints = {{Eigen::Vector3f(0.1f, 0.2f, 0.3f), 10}, {Eigen::Vector3f(-1.0f, 0.0f, 2.0f), 5}};
+  q.brightness.clear();
+  for (std::size_t i = 0; i < q.points.size(); ++i)
+    q.brightness.push_back(static_cast<std::uint8_t>(i * 7 % 256));
   const SE3d answer = localise::test::yaw_pose(0.3, {1, 2, 3});
   ASSERT_TRUE(write_request_dump(dir.path().string(), q, answer, room().truth).ok());
   const auto files = request_dump_files(dir.path().string());
@@ -69,6 +72,7 @@ TEST(RequestDump, ReadsBackWhatWasWritten) {
   EXPECT_DOUBLE_EQ(d->request.prior->radius_m, 12.5);
   ASSERT_EQ(d->request.viewpoints.size(), 2u);
   EXPECT_EQ(d->request.viewpoints[1].count, 5u);
+  EXPECT_EQ(d->request.brightness, q.brightness);
   EXPECT_LT((d->truth.matrix() - room().truth.matrix()).norm(), 1e-9);
   EXPECT_LT((d->answer.matrix() - answer.matrix()).norm(), 1e-9);
 }

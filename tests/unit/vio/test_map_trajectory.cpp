@@ -1,6 +1,7 @@
 // The trajectory edge_client writes: poses held in the odometry frame until the cloud places
 // their run, moved by that answer; a doubted lock gives back what it placed, the next answer
-// places it; poses never placed are kept as the filter had them and counted.
+// places it; poses never placed are kept as the filter had them and counted; each lock's own
+// placement is kept as accepted.
 #include <gtest/gtest.h>
 
 #include "mrvs/edge/map_trajectory.h"
@@ -65,6 +66,12 @@ TEST(MapTrajectory, ADoubtedLocksPosesAreMovedByTheNextAnswer) {
   ASSERT_EQ(t.trajectory().size(), 20u);
   EXPECT_LT(max_error(t.trajectory(), 0, 20), 1e-9);
   EXPECT_EQ(t.never_mapped(), 0);
+  // The locks as accepted: the wrong one where it put the body (4 m off), the right one right.
+  ASSERT_EQ(t.locks().size(), 2u);
+  EXPECT_EQ(t.locks()[0].t_ns, 3 * kSecond);
+  EXPECT_GT((t.locks()[0].T_w_b.translation() - truth(3).translation()).norm(), 3.0);
+  EXPECT_EQ(t.locks()[1].t_ns, 12 * kSecond);
+  EXPECT_LT((t.locks()[1].T_w_b.translation() - truth(12).translation()).norm(), 1e-9);
 }
 
 // Doubted and never placed again before a restart: the poses are kept as the filter had them

@@ -56,6 +56,13 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
   double sight_margin_m = 0.15;         ///< ... to this far before their point, m ...
   double sight_margin_fraction = 0.15;  ///< ... plus this share of the line (lines grazing a surface)
   double blocked_weight = 1.0;  ///< a pose's score (structure share) drops by this times its blocked share
+  /// A pose's score rises by this times the rank correlation of the submap's brightness with
+  /// the map's intensity at its inliers (Wolcott & Eustice, IROS 2014: a camera in a LiDAR
+  /// reflectivity map); 0: geometry only.
+  double appearance_weight = 0.0;
+  int appearance_min_points = 50;  ///< fewer inliers with a brightness: no appearance term
+  /// The correlations of two poses tell them apart only beyond this many standard errors.
+  double appearance_margin_sd = 2.0;
   double covariance_inflation = 25.0;  ///< variance factor on the information matrix's inverse
   double max_sigma_m = 0.1;            ///< a less certain translation: too little structure, m
   double max_sigma_deg = 1.0;          ///< a less certain yaw: too little structure, deg
@@ -105,6 +112,12 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
     v("sight_margin_fraction", sight_margin_fraction, in_range(0.0, 1.0),
       "... plus this share of the line's length (grazing lines)");
     v("blocked_weight", blocked_weight, in_range(0.0, 100.0), "score drop per blocked share");
+    v("appearance_weight", appearance_weight, in_range(0.0, 100.0),
+      "score rise per brightness-intensity rank correlation (0: geometry only)");
+    v("appearance_min_points", appearance_min_points, in_range(3, 100000),
+      "least inliers with a brightness for the appearance term");
+    v("appearance_margin_sd", appearance_margin_sd, in_range(0.0, 100.0),
+      "correlation differences within this many standard errors tell nothing");
     v("covariance_inflation", covariance_inflation, in_range(1.0, 1e6), "variance factor of the covariance");
     v("max_sigma_m", max_sigma_m, in_range(0.0001, 100.0), "largest translation sd of an answer, m");
     v("max_sigma_deg", max_sigma_deg, in_range(0.001, 180.0), "largest yaw sd of an answer, deg");

@@ -46,6 +46,10 @@ struct Request {
   /// The points' viewpoints in point order (counts sum to at most points.size(); points after
   /// them have none). Empty: no free-space check.
   std::vector<Viewpoint> viewpoints;
+  /// Per point, in order: the mean image brightness around it (1-255; 0: not known). Empty:
+  /// none. The cloud correlates it with the map's intensity under each pose (the appearance
+  /// that tells a room's symmetric placements apart).
+  std::vector<std::uint8_t> brightness;
 };
 
 enum class Status : std::uint8_t {

@@ -53,7 +53,7 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
   double timeout_s = 3.0;              ///< a request unanswered this long (wall clock) is asked again, s
   double max_range_m = 8.0;            ///< submap points farther from the anchor are left out, m
   double voxel_m = 0.04;               ///< one submap point per cell of this size, m
-  int max_points = 6000;               ///< submap points sent at most (<= 10000, 6 B each)
+  int max_points = 6000;               ///< submap points sent at most (<= 9000, 7 B each)
   int min_points = 150;                ///< fewer: wait for more
   double quantum_m = 0.005;            ///< wire quantisation of the points, m
   double max_ambiguity = 0.8;          ///< answers more ambiguous are refused
@@ -85,7 +85,7 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
     v("timeout_s", timeout_s, in_range(0.01, 600.0), "unanswered request timeout (wall clock), s");
     v("max_range_m", max_range_m, in_range(0.1, 10000.0), "submap radius around the anchor, m");
     v("voxel_m", voxel_m, in_range(0.001, 100.0), "submap thinning cell, m");
-    v("max_points", max_points, in_range(10, 10000), "submap points sent at most");
+    v("max_points", max_points, in_range(10, 9000), "submap points sent at most");
     v("min_points", min_points, in_range(10, 10000), "submap points needed to ask");
     v("quantum_m", quantum_m, in_range(0.0001, 1.0), "wire quantisation of the points, m");
     v("max_ambiguity", max_ambiguity, in_range(0.0, 1.0), "most ambiguous answer accepted");
@@ -194,11 +194,14 @@ class MapLocaliser {
   /// odometry frame).
   void reset();
   /// Points seen at t_ns (odometry frame) from the camera centre `viewpoint_o`, e.g. one dense
-  /// stereo pair.
-  void add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o, const Vec3d& viewpoint_o);
+  /// stereo pair, with their image brightness (one per point, 1-255, 0: not known; or empty).
+  void add_points(TimestampNs t_ns, const std::vector<Vec3d>& points_o, const Vec3d& viewpoint_o,
+                  const std::vector<std::uint8_t>& brightness = {});
   /// A feature's latest position estimate (odometry frame) at t_ns, seen from `viewpoint_o`;
-  /// replaces its earlier one.
-  void set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o, const Vec3d& viewpoint_o);
+  /// replaces its earlier one. brightness: its image brightness now (0-255; <= 0: not seen
+  /// now, the earlier value stays).
+  void set_track_point(FeatureId id, TimestampNs t_ns, const Vec3d& p_o, const Vec3d& viewpoint_o,
+                       float brightness = 0.0f);
   /// Whether a dense stereo pair at t_ns is wanted (dense_stereo source, dense_interval_s,
   /// and gathering()).
   bool wants_dense(TimestampNs t_ns) const;
@@ -263,8 +266,18 @@ class MapLocaliser {
     TimestampNs t_ns = 0;
     Vec3d viewpoint_o = Vec3d::Zero();
   };
-  std::deque<std::pair<Seen, std::vector<Vec3d>>> dense_;
-  std::map<FeatureId, std::pair<Seen, Vec3d>> tracks_;
+  struct DensePoints {
+    Seen seen;
+    std::vector<Vec3d> points;
+    std::vector<std::uint8_t> brightness;  ///< one per point, or empty
+  };
+  struct TrackPoint {
+    Seen seen;
+    Vec3d p = Vec3d::Zero();
+    float brightness = 0.0f;  ///< 0: not known
+  };
+  std::deque<DensePoints> dense_;
+  std::map<FeatureId, TrackPoint> tracks_;
   std::optional<Pending> pending_;
   std::vector<Alignment> candidates_;  ///< agreeing answers so far
   std::deque<Alignment> guesses_;      ///< best poses of the latest ambiguous answers (guesses_confirm)

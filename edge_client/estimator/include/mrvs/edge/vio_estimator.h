@@ -125,7 +125,8 @@ class VioEstimator {
   /// Whether the submap wants a dense stereo pair of the frame at t_cam_ns.
   bool wants_dense_submap(TimestampNs t_cam_ns) const;
   /// Dense stereo points (cam0 frame, m) of the newest frame, fed after feed_frame() for it.
-  void add_dense_submap(TimestampNs t_cam_ns, const std::vector<Eigen::Vector3f>& points_c0);
+  void add_dense_submap(TimestampNs t_cam_ns, const std::vector<Eigen::Vector3f>& points_c0,
+                        const std::vector<std::uint8_t>& brightness = {});
   /// Whether the state is in the map frame.
   bool in_map_frame() const { return in_map_frame_; }
   /// What localisation is doing (alignment.source map).

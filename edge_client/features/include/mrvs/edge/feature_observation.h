@@ -19,6 +19,9 @@ struct FeatureObservation {
   Vec2d uv_right = Vec2d::Zero();
   Vec2d xn_right = Vec2d::Zero();
   int track_length = 1;  ///< frames observed so far, this one included
+  /// Mean cam0 brightness (0-255) of the pixels around uv_left; 0: not measured (the
+  /// localisation submap's appearance, mrvs::edge::patch_brightness).
+  float brightness = 0.0f;
 };
 
 /// The features of one stereo frame.

@@ -11,6 +11,7 @@
 // Pixels: (0, 0) is the centre of the top-left pixel. Level-L pixels (downsample s) relate to
 // full-resolution ones by u_L = (u + 0.5) / s - 0.5.
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -126,8 +127,11 @@ class DenseStereo {
   /// the calibrated sizes: one per pixel_step x pixel_step level pixels with a valid,
   /// consistent disparity whose depth lies in [min_depth_m, max_depth_m], in row-major
   /// order of their pixels, evenly thinned to max_points. InvalidArgument naming the image
-  /// and the expected size and type otherwise; Internal when OpenCV fails.
-  StatusOr<std::vector<Eigen::Vector3f>> points(const cv::Mat& left, const cv::Mat& right) const;
+  /// and the expected size and type otherwise; Internal when OpenCV fails. `brightness`, when
+  /// given, gets one value per point: the rectified left image's mean over the 3 x 3 level
+  /// pixels around it (1-255; the map's intensity is compared with it).
+  StatusOr<std::vector<Eigen::Vector3f>> points(const cv::Mat& left, const cv::Mat& right,
+                                                std::vector<std::uint8_t>* brightness = nullptr) const;
 
   /// The rectified pair of one raw pair at the level (CV_8UC1 of rectification().width x
   /// height, 0 outside the raw images). Same errors as points().

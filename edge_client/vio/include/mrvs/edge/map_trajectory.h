@@ -30,11 +30,14 @@ class MapTrajectory {
   const io::Trajectory& odometry() const { return odometry_; }
   /// Poses written as the filter had them, never placed by the cloud.
   int never_mapped() const { return never_mapped_; }
+  /// The pose each lock placed at its own frame (map frame), as accepted: never moved later
+  /// (a doubted lock's poses in trajectory() are; this is what the lock itself got right).
+  const io::Trajectory& locks() const { return locks_; }
 
  private:
   void keep_unplaced();
 
-  io::Trajectory trajectory_, odometry_, held_;
+  io::Trajectory trajectory_, odometry_, held_, locks_;
   std::size_t lock_begin_ = 0;  ///< trajectory_ index of the first pose the current lock placed
   /// From here on trajectory_ holds what a doubted lock placed (the filter's frame, as held_).
   std::optional<std::size_t> doubted_begin_;

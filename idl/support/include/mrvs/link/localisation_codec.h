@@ -1,7 +1,8 @@
 #pragma once
 // The localisation service's wire form (idl/mrvs_link.idl: LocalisationRequest / Reply) to and
 // from the plain types of mrvs::localisation, with the checks both ends apply. Submap points
-// travel as int16 multiples of a quantum (6 bytes each) relative to the request's anchor.
+// travel as int16 multiples of a quantum (6 bytes each) relative to the request's anchor, each
+// with its image brightness (1 byte) when the edge measured it.
 #include <cstddef>
 #include <cstdint>
 

@@ -1,0 +1,60 @@
+#include "appearance.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace mrvs::localise {
+namespace {
+
+/// Ranks 1..n, ties sharing their mean rank.
+std::vector<double> ranks(const std::vector<double>& x) {
+  std::vector<std::size_t> order(x.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return x[a] < x[b]; });
+  std::vector<double> r(x.size());
+  for (std::size_t i = 0; i < order.size();) {
+    std::size_t j = i;
+    while (j + 1 < order.size() && x[order[j + 1]] == x[order[i]]) ++j;
+    const double mean_rank = 0.5 * static_cast<double>(i + j) + 1.0;
+    for (std::size_t k = i; k <= j; ++k) r[order[k]] = mean_rank;
+    i = j + 1;
+  }
+  return r;
+}
+
+}  // namespace
+
+double rank_correlation(const std::vector<double>& a, const std::vector<double>& b) {
+  const std::size_t n = std::min(a.size(), b.size());
+  if (n < 3 || a.size() != b.size()) return 0.0;
+  const std::vector<double> ra = ranks(a), rb = ranks(b);
+  const double mean = 0.5 * static_cast<double>(n + 1);
+  double sab = 0.0, saa = 0.0, sbb = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sab += (ra[i] - mean) * (rb[i] - mean);
+    saa += (ra[i] - mean) * (ra[i] - mean);
+    sbb += (rb[i] - mean) * (rb[i] - mean);
+  }
+  if (saa <= 0.0 || sbb <= 0.0) return 0.0;
+  return sab / std::sqrt(saa * sbb);
+}
+
+Appearance appearance(const MapSurface& surface, const FineResult& fine,
+                      const std::vector<float>& brightness) {
+  std::vector<double> seen, mapped;
+  const std::size_t n = std::min(fine.matched.size(), brightness.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (fine.matched[i] < 0 || !(brightness[i] > 0.0f)) continue;
+    const float intensity = surface.intensity(static_cast<std::uint32_t>(fine.matched[i]));
+    if (!std::isfinite(intensity)) continue;
+    seen.push_back(brightness[i]);
+    mapped.push_back(intensity);
+  }
+  Appearance a;
+  a.points = static_cast<int>(seen.size());
+  a.correlation = rank_correlation(seen, mapped);
+  return a;
+}
+
+}  // namespace mrvs::localise

@@ -1,0 +1,111 @@
+// The appearance check: Spearman's rank correlation against a brute-force definition (ranks by
+// counting, Pearson of the ranks), invariant to any increasing map of either sample; and the
+// correlation at the fine stage's inliers high where the submap's brightness follows the map's
+// intensity and near zero where it does not.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "appearance.h"
+#include "localise_scene.h"
+
+namespace mrvs::localise {
+namespace {
+
+/// Rank of x[i] by counting (ties: the mean of the ranks they share), then Pearson.
+double brute_force_spearman(const std::vector<double>& a, const std::vector<double>& b) {
+  auto ranks = [](const std::vector<double>& x) {
+    std::vector<double> r(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      double below = 0.0, equal = 0.0;
+      for (double y : x) {
+        below += y < x[i];
+        equal += y == x[i];
+      }
+      r[i] = below + 0.5 * (equal + 1.0);
+    }
+    return r;
+  };
+  const std::vector<double> ra = ranks(a), rb = ranks(b);
+  const double n = static_cast<double>(a.size());
+  double ma = 0, mb = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ma += ra[i] / n;
+    mb += rb[i] / n;
+  }
+  double sab = 0, saa = 0, sbb = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    sab += (ra[i] - ma) * (rb[i] - mb);
+    saa += (ra[i] - ma) * (ra[i] - ma);
+    sbb += (rb[i] - mb) * (rb[i] - mb);
+  }
+  return sab / std::sqrt(saa * sbb);
+}
+
+TEST(Appearance, RankCorrelationMatchesBruteForceWithTies) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> grey(0, 20);  // few values: many ties
+  std::normal_distribution<double> noise(0.0, 4.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<double> a, b;
+    for (int i = 0; i < 200; ++i) {
+      a.push_back(grey(rng));
+      b.push_back(trial % 2 ? a.back() + noise(rng) : static_cast<double>(grey(rng)));
+    }
+    EXPECT_NEAR(rank_correlation(a, b), brute_force_spearman(a, b), 1e-12) << trial;
+  }
+}
+
+TEST(Appearance, RankCorrelationIgnoresIncreasingMapsAndFlipsForDecreasingOnes) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<double> a, up, down;
+  for (int i = 0; i < 100; ++i) {
+    a.push_back(u(rng));
+    up.push_back(3.0 + 50.0 * std::pow(a.back(), 0.4));  // gain, offset, gamma
+    down.push_back(-a.back());
+  }
+  EXPECT_NEAR(rank_correlation(a, up), 1.0, 1e-12);
+  EXPECT_NEAR(rank_correlation(a, down), -1.0, 1e-12);
+  EXPECT_EQ(rank_correlation(a, std::vector<double>(100, 2.0)), 0.0);  // constant: no evidence
+  EXPECT_EQ(rank_correlation({1.0, 2.0}, {1.0, 2.0}), 0.0);            // too few
+}
+
+TEST(Appearance, InliersFollowTheMapsTextureOnlyWhereThePoseIsRight) {
+  test::Scene scene;  // bare 8 x 6 x 3 m room: a half turn fits the geometry exactly
+  const auto samples = scene.sample(0.01);
+  const auto map = test::voxelise(samples, {0.03}, Eigen::Vector3d::Zero(), test::blob_albedo);
+  std::vector<Eigen::Vector3f> points;
+  std::vector<float> intensity;
+  for (const auto& p : map->levels[0].points) {
+    points.push_back(p.position);
+    intensity.push_back(p.intensity);
+  }
+  const MapSurface surface = MapSurface::build(points, 12, 0.01, intensity);
+  const SE3d T_o_m = test::yaw_pose(0.0, Eigen::Vector3d::Zero());
+  auto q = test::submap_request(samples, {4.3, 3.2, 1.4}, 4.0, 3000, 0.005, T_o_m, 3);
+  test::add_brightness(&q, T_o_m, test::blob_albedo, 4);
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<float> brightness;
+  for (std::size_t i = 0; i < q.points.size(); ++i) {
+    pts.push_back(q.points[i].cast<double>());
+    brightness.push_back(q.brightness[i]);
+  }
+  FineOptions o;
+  o.iterations = 0;  // evaluate the given poses as they are
+  const FineResult right = refine_pose(surface, pts, 0.0, q.anchor_o, o);
+  // The half turn about the room's centre: the anchor (4.3, 3.2) goes to (3.7, 2.8).
+  const FineResult turned = refine_pose(surface, pts, M_PI, Eigen::Vector3d(3.7, 2.8, 1.4), o);
+  ASSERT_GT(right.fitness, 0.9);
+  ASSERT_GT(turned.fitness, 0.9);  // the geometry cannot tell them apart
+  const Appearance a_right = appearance(surface, right, brightness);
+  const Appearance a_turned = appearance(surface, turned, brightness);
+  EXPECT_GT(a_right.points, 1000);
+  EXPECT_GT(a_right.correlation, 0.7);
+  EXPECT_LT(std::abs(a_turned.correlation), 0.15);
+  // No brightness: no points, no correlation.
+  EXPECT_EQ(appearance(surface, right, {}).points, 0);
+}
+
+}  // namespace
+}  // namespace mrvs::localise
