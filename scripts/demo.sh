@@ -52,7 +52,7 @@ grep -E '^(RAW_POINTS|LEVEL_[0-9]+_(RESOLUTION_M|POINTS)|MAP_BYTES|SECONDS_TOTAL
 
 step "3. cloud_server + edge_client with the map over Fast DDS (loopback)"
 runner=("$MRVS_ROOT/scripts/lib/map_run.sh" "$map" "$sequence" "$out/map" "$MRVS_ROOT/config/euroc.yaml"
-        "$MRVS_ROOT/config/map_indoor.yaml" --realtime --log-level info --progress 5)
+        "$MRVS_ROOT/config/map_indoor.yaml" --realtime --log-level info --progress 5 --lock-poses "$out/map/locks.txt")
 if [[ $(id -u) -eq 0 ]] && command -v unshare >/dev/null; then
   # A private network namespace: nothing the participants send can leave the machine.
   unshare -n bash -c 'ip link set lo up && exec "$@"' map_run "${runner[@]}"
@@ -71,9 +71,10 @@ ate() {  # ate TRAJ KEY
   "$bin/evaluate_trajectory" --est "$1" --gt "$gt" --align se3 --log-level warn | awk -v k="$2:" '$1 == k { print $2 }'
 }
 e=$out/map/edge.txt
-# Where the cloud placed the edge, against the simulator's truth at that frame.
+# Where the cloud placed the edge (the first lock's own placement), against the simulator's truth
+# at that frame.
 if [[ $(value "$e" LOCALISED) -ge 1 ]]; then
-  "$bin/evaluate_trajectory" --est "$out/map/trajectory.txt" --gt "$gt" --at "$(value "$e" LOCALISED_AT_T_NS)" \
+  "$bin/evaluate_trajectory" --est "$out/map/locks.txt" --gt "$gt" --align none --at "$(value "$e" LOCALISED_AT_T_NS)" \
       --log-level warn >"$out/map/alignment.txt"
   echo "localised in the map after $(value "$e" LOCALISED_AFTER_S) s of VIO" \
        "($(value "$e" LOCALISATION_REQUESTS) requests of $(value "$e" LOCALISATION_REQUEST_BYTES) B," \

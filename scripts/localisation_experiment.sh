@@ -90,7 +90,7 @@ for trajectory in "$shared"/data/euroc_groundtruth/*.txt; do
     if [[ $(value "$run/edge.txt" LOCALISED) -ge 1 ]]; then
       # The lock's own placement (not the written trajectory, which a later lock may move after
       # a doubt).
-      "$bin/evaluate_trajectory" --est "$run/locks.txt" --gt "$clip/mav0/state_groundtruth_estimate0/data.csv" \
+      "$bin/evaluate_trajectory" --est "$run/locks.txt" --gt "$clip/mav0/state_groundtruth_estimate0/data.csv" --align none \
           --at "$at" --log-level warn | grep -E '^POSE_' >"$run/alignment.txt"
     fi
     # Indoors a request with a prior region is a pose fix (after the lock), one without it a

@@ -79,7 +79,7 @@ if [[ $report_only -eq 0 ]]; then
     "$bin/evaluate_trajectory" --est "$run/trajectory.txt" --gt "$gt" --log-level warn >"$run/eval.txt"
     : >"$run/alignment.txt"
     for at in $(value "$run/edge.txt" LOCALISED_AT_T_NS_PER_RUN | tr ',' ' '); do
-      "$bin/evaluate_trajectory" --est "$run/locks.txt" --gt "$gt" --at "$at" --log-level warn \
+      "$bin/evaluate_trajectory" --est "$run/locks.txt" --gt "$gt" --align none --at "$at" --log-level warn \
           | grep -E '^POSE_' >>"$run/alignment.txt"
     done
     grep -h 'initialised (' "$run/edge.log" | sed -E 's/.* at ([0-9]+) ns.*/\1/' >"$run/initialised_ns.txt" || true

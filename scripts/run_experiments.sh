@@ -101,17 +101,18 @@ run_variant() {  # run_variant SEQ_DIR MAP RESULT_DIR CONFIG MAP_CONFIG VARIANT 
     "$bin/edge_client" --dataset "$seq" --config "$config" --output "$dir/trajectory.txt" --no-map --threads 1 \
         --log-level warn --progress 0 "$@" >"$dir/edge.txt"
   else
-    echo "scripts/lib/map_run.sh $map $seq OUT $config $map_config $*" >"$dir/command.txt"
+    echo "scripts/lib/map_run.sh $map $seq OUT $config $map_config $* --lock-poses OUT/locks.txt" >"$dir/command.txt"
     in_netns "$MRVS_ROOT/scripts/lib/map_run.sh" "$map" "$seq" "$dir" "$config" "$map_config" \
-        --log-level warn --progress 0 "$@"
+        --log-level warn --progress 0 "$@" --lock-poses "$dir/locks.txt"
   fi
   local gt=$seq/mav0/state_groundtruth_estimate0/data.csv
   "$bin/evaluate_trajectory" --est "$dir/trajectory.txt" --gt "$gt" --align se3 --log-level warn >"$dir/eval.txt"
-  # The map-based start: where the cloud placed the edge, against the truth at that frame.
+  # The map-based start: where the cloud placed the edge (the first lock's own placement, not
+  # moved by a later lock), against the truth at that frame.
   local at
   at=$(awk '$1 == "LOCALISED_AT_T_NS:" {print $2}' "$dir/edge.txt")
   if [[ $variant == map_start && -n $at && $at != 0 ]]; then
-    "$bin/evaluate_trajectory" --est "$dir/trajectory.txt" --gt "$gt" --at "$at" --log-level warn \
+    "$bin/evaluate_trajectory" --est "$dir/locks.txt" --gt "$gt" --align none --at "$at" --log-level warn \
         | grep -E '^POSE_(HEADING_)?ERROR_AT_' >"$dir/alignment.txt"
   fi
   printf '  %-22s ATE %s m (SE3 %s m)\n' "$variant" "$(awk '$1 == "ATE_RMSE_m:" {print $2}' "$dir/eval.txt")" \
