@@ -57,4 +57,31 @@ Appearance appearance(const MapSurface& surface, const FineResult& fine,
   return a;
 }
 
+Slide slide_by_appearance(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points,
+                          const std::vector<float>& brightness, double yaw, const Eigen::Vector3d& anchor,
+                          const Eigen::Vector3d& direction, FineOptions fine, const SlideOptions& o) {
+  fine.iterations = 0;
+  Slide out;
+  out.fine = refine_pose(surface, points, yaw, anchor, fine);
+  out.start = out.appearance = appearance(surface, out.fine, brightness);
+  if (out.start.points < o.min_points || !(o.step_m > 0.0) || !(o.range_m > 0.0)) return out;
+  const double start_fitness = out.fine.fitness;
+  const int steps = static_cast<int>(std::floor(o.range_m / o.step_m + 1e-9));
+  for (int k = -steps; k <= steps; ++k) {
+    if (k == 0) continue;
+    const double s = k * o.step_m;
+    FineResult f = refine_pose(surface, points, yaw, anchor + s * direction, fine);
+    if (f.fitness < o.min_fitness_ratio * start_fitness) continue;
+    const Appearance a = appearance(surface, f, brightness);
+    if (a.points < o.min_points) continue;
+    const double margin = o.margin_sd * std::sqrt(1.0 / a.points + 1.0 / out.start.points);
+    if (a.correlation > out.start.correlation + margin && a.correlation > out.appearance.correlation) {
+      out.offset_m = s;
+      out.fine = std::move(f);
+      out.appearance = a;
+    }
+  }
+  return out;
+}
+
 }  // namespace mrvs::localise

@@ -2,6 +2,7 @@
 // counting, Pearson of the ranks), invariant to any increasing map of either sample; and the
 // correlation at the fine stage's inliers high where the submap's brightness follows the map's
 // intensity and near zero where it does not.
+#include <algorithm>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -105,6 +106,48 @@ TEST(Appearance, InliersFollowTheMapsTextureOnlyWhereThePoseIsRight) {
   EXPECT_LT(std::abs(a_turned.correlation), 0.15);
   // No brightness: no points, no correlation.
   EXPECT_EQ(appearance(surface, right, {}).points, 0);
+}
+
+// A pose slid 14 cm along x (as the fine stage slides along a wall it cannot tell apart) is
+// brought back by the texture within a step; with brightness unrelated to the map it stays.
+TEST(Appearance, ASlideTheGeometryCannotSeeIsUndoneByTheTexture) {
+  test::Scene scene;
+  const auto samples = scene.sample(0.01);
+  const auto map = test::voxelise(samples, {0.03}, Eigen::Vector3d::Zero(), test::blob_albedo);
+  std::vector<Eigen::Vector3f> points;
+  std::vector<float> intensity;
+  for (const auto& p : map->levels[0].points) {
+    points.push_back(p.position);
+    intensity.push_back(p.intensity);
+  }
+  const MapSurface surface = MapSurface::build(points, 12, 0.01, intensity);
+  const SE3d T_o_m = test::yaw_pose(0.0, Eigen::Vector3d::Zero());
+  auto q = test::submap_request(samples, {4.3, 3.2, 1.4}, 4.0, 3000, 0.005, T_o_m, 3);
+  test::add_brightness(&q, T_o_m, test::blob_albedo, 4);
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<float> brightness;
+  for (std::size_t i = 0; i < q.points.size(); ++i) {
+    pts.push_back(q.points[i].cast<double>());
+    brightness.push_back(q.brightness[i]);
+  }
+  const Eigen::Vector3d along = Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d off = q.anchor_o + 0.14 * along;
+  const Slide back =
+      slide_by_appearance(surface, pts, brightness, 0.0, off, along, FineOptions{}, SlideOptions{});
+  EXPECT_NEAR(back.offset_m, -0.14, 0.021);
+  EXPECT_NEAR(back.fine.anchor.x(), q.anchor_o.x(), 0.021);
+  EXPECT_GT(back.appearance.correlation, back.start.correlation + 0.3);
+  // From the right pose nothing moves.
+  const Slide stay =
+      slide_by_appearance(surface, pts, brightness, 0.0, q.anchor_o, along, FineOptions{}, SlideOptions{});
+  EXPECT_NEAR(stay.offset_m, 0.0, 0.021);
+  // Brightness unrelated to the map: no gain beyond the margin, the pose stays where it was.
+  std::mt19937 rng(2);
+  std::shuffle(brightness.begin(), brightness.end(), rng);
+  const Slide none =
+      slide_by_appearance(surface, pts, brightness, 0.0, off, along, FineOptions{}, SlideOptions{});
+  EXPECT_EQ(none.offset_m, 0.0);
+  EXPECT_EQ(none.fine.anchor, off);
 }
 
 }  // namespace

@@ -80,6 +80,7 @@ TEST(Localiser, TextureTellsABareRoomsHalfTurnApart) {
   const auto map = test::voxelise(samples, {0.03, 0.1}, Eigen::Vector3d::Zero(), test::blob_albedo);
   LocaliserOptions o;
   o.appearance_weight = 0.5;
+  o.appearance_slide_m = 0.3;
   const Localiser loc = make(map, o);
   const SE3d T_o_m = test::yaw_pose(1.0, {1, 1, 0});
   auto q = test::submap_request(samples, {4.3, 3.2, 1.4}, 4.0, 4000, 0.01, T_o_m, 3);
