@@ -81,6 +81,7 @@ Slide slide_by_appearance(const MapSurface& surface, const std::vector<Eigen::Ve
       out.appearance = a;
     }
   }
+  out.unbracketed = out.offset_m != 0.0 && std::abs(std::abs(out.offset_m) - steps * o.step_m) < 1e-9;
   return out;
 }
 

@@ -40,6 +40,9 @@ struct Slide {
   FineResult fine;        ///< the fit at the chosen pose (the start's when it stays)
   Appearance appearance;  ///< there
   Appearance start;       ///< at the start
+  /// The best offset is the last one tried (+-range): the appearance still rises beyond the
+  /// range, so the peak (and the pose) lies farther along; offset_m is then that edge.
+  bool unbracketed = false;
 };
 
 /// Where the geometry leaves a direction weakly held (a submap of one wall and the floor slides

@@ -246,6 +246,7 @@ struct Refined {
   std::vector<std::uint8_t> blocked_lines;  ///< per line of sight: 1 through a surface
   Appearance appearance;                    ///< the submap's brightness against the map's intensity
   double slid_m = 0.0;                      ///< moved from the fine stage's pose by the appearance
+  bool slide_unbracketed = false;           ///< the appearance rises past the slide's range (Slide)
   /// What tells placements apart: the inliers on vertical surfaces (a floor fits anywhere at
   /// the right height) less blocked_weight times the share of the lines of sight the pose
   /// makes pass through a surface, plus appearance_weight times the appearance correlation
@@ -266,9 +267,11 @@ std::optional<Eigen::Vector3d> weakest_horizontal(const FineResult& f) {
 
 /// The fine stage's pose slid along its weakest horizontal direction to where the appearance
 /// fits best (appearance_slide_m; slide_by_appearance), when that beats where it stopped.
-FineResult slide(const Localiser::Impl& m, const Prepared& p, FineResult f, double* slid_m) {
+FineResult slide(const Localiser::Impl& m, const Prepared& p, FineResult f, double* slid_m,
+                 bool* unbracketed) {
   const LocaliserOptions& o = m.options;
   *slid_m = 0.0;
+  *unbracketed = false;
   const std::optional<Eigen::Vector3d> d = weakest_horizontal(f);
   if (o.appearance_weight <= 0.0 || o.appearance_slide_m <= 0.0 || !d) return f;
   SlideOptions so;
@@ -289,6 +292,10 @@ FineResult slide(const Localiser::Impl& m, const Prepared& p, FineResult f, doub
   const Slide s =
       slide_by_appearance(m.surface, points, brightness, f.yaw, f.anchor, *d, fine_options(o), so);
   if (s.offset_m == 0.0) return f;
+  if (s.unbracketed) {  // the pose lies beyond the range: not where the fine stage put it
+    *unbracketed = true;
+    return f;
+  }
   *slid_m = s.offset_m;
   FineOptions at = fine_options(o);
   at.iterations = 0;
@@ -299,7 +306,8 @@ Refined refine_one(const Localiser::Impl& m, const Prepared& p, const Likelihood
                    const Hypothesis& h) {
   const LocaliserOptions& o = m.options;
   Refined r;
-  r.fine = slide(m, p, refine_pose(m.surface, p.fine, h.yaw, h.anchor, fine_options(o)), &r.slid_m);
+  r.fine = slide(m, p, refine_pose(m.surface, p.fine, h.yaw, h.anchor, fine_options(o)), &r.slid_m,
+                 &r.slide_unbracketed);
   r.pose = {r.fine.yaw, r.fine.anchor, h.score};
   r.blocked_lines = blocked_lines(grid, p.sight, r.pose.yaw, r.pose.anchor, o.sight_start_m, o.sight_margin_m,
                                   o.sight_margin_fraction);
@@ -457,6 +465,16 @@ Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p,
     r.status = LStatus::kTooLittleStructure;
     r.detail = fmt::format("the submap leaves the pose uncertain: {:.3f} m, {:.2f} deg (limits {} m, {} deg)",
                            sigma_m, sigma_deg, o.max_sigma_m, o.max_sigma_deg);
+    return r;
+  }
+  if (best.slide_unbracketed) {  // no best guess either (hypotheses 0): the pose is known to be off
+    r.status = LStatus::kAmbiguous;
+    r.hypotheses = 0;
+    r.detail = fmt::format(
+        "the appearance rises past {:.2f} m along the direction the geometry holds least: the pose lies "
+        "farther "
+        "along it",
+        o.appearance_slide_m);
     return r;
   }
   if (r.ambiguity > o.max_ambiguity) {

@@ -137,6 +137,12 @@ TEST(Appearance, ASlideTheGeometryCannotSeeIsUndoneByTheTexture) {
   EXPECT_NEAR(back.offset_m, -0.14, 0.021);
   EXPECT_NEAR(back.fine.anchor.x(), q.anchor_o.x(), 0.021);
   EXPECT_GT(back.appearance.correlation, back.start.correlation + 0.3);
+  EXPECT_FALSE(back.unbracketed);
+  // 40 cm off, beyond the 0.3 m range: the best offset is the range's edge, flagged.
+  const Slide far = slide_by_appearance(surface, pts, brightness, 0.0, q.anchor_o + 0.4 * along, along,
+                                        FineOptions{}, SlideOptions{});
+  EXPECT_TRUE(far.unbracketed);
+  EXPECT_NEAR(far.offset_m, -0.3, 1e-9);
   // From the right pose nothing moves.
   const Slide stay =
       slide_by_appearance(surface, pts, brightness, 0.0, q.anchor_o, along, FineOptions{}, SlideOptions{});
