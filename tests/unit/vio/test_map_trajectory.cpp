@@ -74,6 +74,31 @@ TEST(MapTrajectory, ADoubtedLocksPosesAreMovedByTheNextAnswer) {
   EXPECT_LT((t.locks()[1].T_w_b.translation() - truth(12).translation()).norm(), 1e-9);
 }
 
+// A right lock, then the filter drifts (a linear walk in se(3), 6 cm and 1.5 deg by the doubt) and
+// stops drifting; the next answer corrects the drift: the poses the doubted lock placed get the
+// correction ramped in (none at the lock, all of it at the doubt) and end on the truth, where
+// moving them in full would put the first ones 6 cm off.
+TEST(MapTrajectory, ARightLockDoubtedForDriftKeepsItsPlacementAndRampsTheCorrectionIn) {
+  Vec6d drift;
+  drift << 0.05, -0.03, 0.01, 0.0, 0.0, 1.5 * M_PI / 180.0;
+  auto D = [&](int k) { return SE3d::exp(std::clamp((k - 3) / 4.0, 0.0, 1.0) * drift); };
+  const SE3d T_o_m = frame(0.4, Vec3d(2.0, 1.0, 0.0));
+  MapTrajectory t;
+  for (int k = 0; k < 16; ++k) {
+    std::optional<SE3d> placed;
+    SE3d T_w_b = T_o_m * truth(k);
+    if (k >= 3) T_w_b = D(k) * truth(k);  // the map frame from the right lock on, drifting
+    if (k == 3) placed = T_o_m.inverse();
+    const bool in_map = (k >= 3 && k < 8) || k >= 12;
+    if (k == 12) placed = D(12).inverse();  // the correction of the drift
+    if (k >= 12) T_w_b = truth(k);
+    t.add(0, {k * kSecond, T_w_b}, in_map, placed, k == 8);
+  }
+  t.finish();
+  ASSERT_EQ(t.trajectory().size(), 16u);
+  EXPECT_LT(max_error(t.trajectory(), 0, 16), 1e-9);
+}
+
 // Doubted and never placed again before a restart: the poses are kept as the filter had them
 // (the wrong lock's frame), counted as never placed; the next run is placed on its own.
 TEST(MapTrajectory, PosesNeverPlacedAgainAreKeptAndCounted) {
