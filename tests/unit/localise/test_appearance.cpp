@@ -72,9 +72,18 @@ TEST(Appearance, RankCorrelationIgnoresIncreasingMapsAndFlipsForDecreasingOnes) 
   EXPECT_EQ(rank_correlation({1.0, 2.0}, {1.0, 2.0}), 0.0);            // too few
 }
 
-TEST(Appearance, InliersFollowTheMapsTextureOnlyWhereThePoseIsRight) {
-  test::Scene scene;  // bare 8 x 6 x 3 m room: a half turn fits the geometry exactly
-  const auto samples = scene.sample(0.01);
+/// The bare 8 x 6 x 3 m room (a half turn fits its geometry exactly) textured by blob_albedo, its
+/// 3 cm level as a MapSurface with intensity, and a submap seen from (4.3, 3.2, 1.4) with the
+/// camera's brightness, odometry frame = map frame.
+struct TexturedRoom {
+  MapSurface surface;
+  localisation::Request q;
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<float> brightness;
+};
+
+TexturedRoom textured_room() {
+  const auto samples = test::Scene{}.sample(0.01);
   const auto map = test::voxelise(samples, {0.03}, Eigen::Vector3d::Zero(), test::blob_albedo);
   std::vector<Eigen::Vector3f> points;
   std::vector<float> intensity;
@@ -82,16 +91,24 @@ TEST(Appearance, InliersFollowTheMapsTextureOnlyWhereThePoseIsRight) {
     points.push_back(p.position);
     intensity.push_back(p.intensity);
   }
-  const MapSurface surface = MapSurface::build(points, 12, 0.01, intensity);
+  TexturedRoom r;
+  r.surface = MapSurface::build(points, 12, 0.01, intensity);
   const SE3d T_o_m = test::yaw_pose(0.0, Eigen::Vector3d::Zero());
-  auto q = test::submap_request(samples, {4.3, 3.2, 1.4}, 4.0, 3000, 0.005, T_o_m, 3);
-  test::add_brightness(&q, T_o_m, test::blob_albedo, 4);
-  std::vector<Eigen::Vector3d> pts;
-  std::vector<float> brightness;
-  for (std::size_t i = 0; i < q.points.size(); ++i) {
-    pts.push_back(q.points[i].cast<double>());
-    brightness.push_back(q.brightness[i]);
+  r.q = test::submap_request(samples, {4.3, 3.2, 1.4}, 4.0, 3000, 0.005, T_o_m, 3);
+  test::add_brightness(&r.q, T_o_m, test::blob_albedo, 4);
+  for (std::size_t i = 0; i < r.q.points.size(); ++i) {
+    r.pts.push_back(r.q.points[i].cast<double>());
+    r.brightness.push_back(r.q.brightness[i]);
   }
+  return r;
+}
+
+TEST(Appearance, InliersFollowTheMapsTextureOnlyWhereThePoseIsRight) {
+  TexturedRoom room = textured_room();
+  const MapSurface& surface = room.surface;
+  const localisation::Request& q = room.q;
+  const std::vector<Eigen::Vector3d>& pts = room.pts;
+  std::vector<float>& brightness = room.brightness;
   FineOptions o;
   o.iterations = 0;  // evaluate the given poses as they are
   const FineResult right = refine_pose(surface, pts, 0.0, q.anchor_o, o);
@@ -111,25 +128,11 @@ TEST(Appearance, InliersFollowTheMapsTextureOnlyWhereThePoseIsRight) {
 // A pose slid 14 cm along x (as the fine stage slides along a wall it cannot tell apart) is
 // brought back by the texture within a step; with brightness unrelated to the map it stays.
 TEST(Appearance, ASlideTheGeometryCannotSeeIsUndoneByTheTexture) {
-  test::Scene scene;
-  const auto samples = scene.sample(0.01);
-  const auto map = test::voxelise(samples, {0.03}, Eigen::Vector3d::Zero(), test::blob_albedo);
-  std::vector<Eigen::Vector3f> points;
-  std::vector<float> intensity;
-  for (const auto& p : map->levels[0].points) {
-    points.push_back(p.position);
-    intensity.push_back(p.intensity);
-  }
-  const MapSurface surface = MapSurface::build(points, 12, 0.01, intensity);
-  const SE3d T_o_m = test::yaw_pose(0.0, Eigen::Vector3d::Zero());
-  auto q = test::submap_request(samples, {4.3, 3.2, 1.4}, 4.0, 3000, 0.005, T_o_m, 3);
-  test::add_brightness(&q, T_o_m, test::blob_albedo, 4);
-  std::vector<Eigen::Vector3d> pts;
-  std::vector<float> brightness;
-  for (std::size_t i = 0; i < q.points.size(); ++i) {
-    pts.push_back(q.points[i].cast<double>());
-    brightness.push_back(q.brightness[i]);
-  }
+  TexturedRoom room = textured_room();
+  const MapSurface& surface = room.surface;
+  const localisation::Request& q = room.q;
+  const std::vector<Eigen::Vector3d>& pts = room.pts;
+  std::vector<float>& brightness = room.brightness;
   const Eigen::Vector3d along = Eigen::Vector3d::UnitX();
   const Eigen::Vector3d off = q.anchor_o + 0.14 * along;
   const Slide back =
