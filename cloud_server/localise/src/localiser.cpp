@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <unordered_map>
 #include <variant>
@@ -12,6 +13,7 @@
 
 #include "appearance.h"
 #include "correlative_search.h"
+#include "layer_balance.h"
 #include "likelihood_grid.h"
 #include "map_surface.h"
 #include "mrvs/core/hash.h"
@@ -166,7 +168,9 @@ Prepared prepare(const Request& q, const LocaliserOptions& o) {
   std::vector<Eigen::Vector3d> aligned;
   aligned.reserve(q.points.size());
   for (const Eigen::Vector3f& x : q.points) aligned.push_back(p.R_g * x.cast<double>());
-  p.coarse = thin(aligned, o.coarse_resolution_m, o.coarse_max_points);
+  p.coarse = balance_layer(thin(aligned, o.coarse_resolution_m, std::numeric_limits<int>::max()),
+                           o.coarse_max_points, o.coarse_layer_share)
+                 .points;
   p.fine = thin(aligned, o.fine_voxel_m, o.fine_max_points, q.brightness, &p.fine_brightness);
   constexpr std::size_t kSlidePoints = 700;
   const std::size_t stride = std::max<std::size_t>(1, (p.fine.size() + kSlidePoints - 1) / kSlidePoints);
@@ -476,6 +480,16 @@ Result verdict(const Localiser::Impl& m, const Request& q, const Prepared& p,
         "farther "
         "along it",
         o.appearance_slide_m);
+    return r;
+  }
+  if (o.appearance_weight > 0.0 && best.appearance.points >= o.appearance_min_points &&
+      best.appearance.correlation < o.appearance_min) {  // no best guess either: the pose is likely wrong
+    r.status = LStatus::kAmbiguous;
+    r.hypotheses = 0;
+    r.detail = fmt::format(
+        "the best pose's appearance {:.2f} ({} points) is below localise.appearance_min {:.2f}: the submap's "
+        "texture does not match the map there, the right pose was likely not among the {} refined",
+        best.appearance.correlation, best.appearance.points, o.appearance_min, refined.size());
     return r;
   }
   if (r.ambiguity > o.max_ambiguity) {

@@ -23,9 +23,12 @@
 namespace mrvs::localise {
 
 struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
-  int min_points = 100;                  ///< fewer submap points: bad request
-  double coarse_resolution_m = 0.1;      ///< the coarse grid's cell, m
-  int coarse_max_points = 500;           ///< submap points scored by the coarse search
+  int min_points = 100;              ///< fewer submap points: bad request
+  double coarse_resolution_m = 0.1;  ///< the coarse grid's cell, m
+  int coarse_max_points = 500;       ///< submap points scored by the coarse search
+  /// Largest share of the coarse search's points on the dominant horizontal layer (the floor;
+  /// balance_layer): a view mostly of floor keeps its few points on walls in the search. 1: no cap.
+  double coarse_layer_share = 1.0;
   double yaw_step_deg = 0.0;             ///< 0: the cell seen from the submap's far points
   int branch_levels = 5;                 ///< pyramid levels of the branch and bound
   double coarse_min_score = 0.15;        ///< a pose scoring less is no hypothesis, [0, 1]
@@ -61,6 +64,9 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
   /// reflectivity map); 0: geometry only.
   double appearance_weight = 0.0;
   int appearance_min_points = 50;  ///< fewer inliers with a brightness: no appearance term
+  /// A best pose whose appearance correlation is below this is no answer (ambiguous, no guess):
+  /// the texture says the right pose was not among the hypotheses. -1: never.
+  double appearance_min = -1.0;
   /// The correlations of two poses tell them apart only beyond this many standard errors.
   double appearance_margin_sd = 2.0;
   /// The fine stage's pose is slid along its weakest horizontal direction by up to this (both
@@ -78,6 +84,8 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
     v("min_points", min_points, in_range(10, 100000), "submap points a request needs");
     v("coarse_resolution_m", coarse_resolution_m, in_range(0.01, 10.0), "coarse grid cell, m");
     v("coarse_max_points", coarse_max_points, in_range(10, 100000), "submap points of the coarse search");
+    v("coarse_layer_share", coarse_layer_share, in_range(0.05, 1.0),
+      "largest share of the coarse points on the dominant horizontal layer (1: no cap)");
     v("yaw_step_deg", yaw_step_deg, in_range(0.0, 45.0), "coarse yaw step, deg (0: from the cell and range)");
     v("branch_levels", branch_levels, in_range(1, 12), "branch-and-bound pyramid levels");
     v("coarse_min_score", coarse_min_score, in_range(0.0, 1.0), "least coarse score of a hypothesis");
@@ -121,6 +129,8 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
       "score rise per brightness-intensity rank correlation (0: geometry only)");
     v("appearance_min_points", appearance_min_points, in_range(3, 100000),
       "least inliers with a brightness for the appearance term");
+    v("appearance_min", appearance_min, in_range(-1.0, 1.0),
+      "least appearance correlation of an answer's pose (-1: none)");
     v("appearance_margin_sd", appearance_margin_sd, in_range(0.0, 100.0),
       "correlation differences within this many standard errors tell nothing");
     v("appearance_slide_m", appearance_slide_m, in_range(0.0, 10.0),
