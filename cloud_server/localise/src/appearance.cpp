@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 namespace mrvs::localise {
 namespace {
@@ -57,6 +58,28 @@ Appearance appearance(const MapSurface& surface, const FineResult& fine,
   return a;
 }
 
+namespace {
+
+/// The pose slid by s, when it keeps the fit and has enough inliers with a brightness.
+struct SlideProbe {
+  double s = 0.0;
+  FineResult fine;
+  Appearance appearance;
+};
+
+std::optional<SlideProbe> probe(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points,
+                                const std::vector<float>& brightness, double yaw,
+                                const Eigen::Vector3d& anchor, const Eigen::Vector3d& direction, double s,
+                                const FineOptions& fine, const SlideOptions& o, double start_fitness) {
+  FineResult f = refine_pose(surface, points, yaw, anchor + s * direction, fine);
+  if (f.fitness < o.min_fitness_ratio * start_fitness) return std::nullopt;
+  const Appearance a = appearance(surface, f, brightness);
+  if (a.points < o.min_points) return std::nullopt;
+  return SlideProbe{s, std::move(f), a};
+}
+
+}  // namespace
+
 Slide slide_by_appearance(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points,
                           const std::vector<float>& brightness, double yaw, const Eigen::Vector3d& anchor,
                           const Eigen::Vector3d& direction, FineOptions fine, const SlideOptions& o) {
@@ -67,19 +90,25 @@ Slide slide_by_appearance(const MapSurface& surface, const std::vector<Eigen::Ve
   if (out.start.points < o.min_points || !(o.step_m > 0.0) || !(o.range_m > 0.0)) return out;
   const double start_fitness = out.fine.fitness;
   const int steps = static_cast<int>(std::floor(o.range_m / o.step_m + 1e-9));
-  for (int k = -steps; k <= steps; ++k) {
-    if (k == 0) continue;
-    const double s = k * o.step_m;
-    FineResult f = refine_pose(surface, points, yaw, anchor + s * direction, fine);
-    if (f.fitness < o.min_fitness_ratio * start_fitness) continue;
-    const Appearance a = appearance(surface, f, brightness);
-    if (a.points < o.min_points) continue;
-    const double margin = o.margin_sd * std::sqrt(1.0 / a.points + 1.0 / out.start.points);
-    if (a.correlation > out.start.correlation + margin && a.correlation > out.appearance.correlation) {
-      out.offset_m = s;
-      out.fine = std::move(f);
-      out.appearance = a;
-    }
+  // Coarse to fine: every kSlideCoarse-th step over the range, then the steps around the best.
+  std::optional<SlideProbe> best;
+  const auto consider = [&](int k) {
+    if (k == 0 || std::abs(k) > steps) return;
+    auto p = probe(surface, points, brightness, yaw, anchor, direction, k * o.step_m, fine, o, start_fitness);
+    if (p && (!best || p->appearance.correlation > best->appearance.correlation)) best = std::move(p);
+  };
+  const int stride = std::max(1, std::min(o.coarse_stride, steps));
+  for (int k = -steps; k <= steps; k += stride) consider(k);
+  if ((2 * steps) % stride != 0) consider(steps);  // the range's far edge, which the stride skipped
+  if (!best) return out;
+  const int centre = static_cast<int>(std::lround(best->s / o.step_m));
+  for (int k = centre - stride + 1; k < centre + stride; ++k)
+    if (k != centre) consider(k);
+  const double margin = o.margin_sd * std::sqrt(1.0 / best->appearance.points + 1.0 / out.start.points);
+  if (best->appearance.correlation > out.start.correlation + margin) {
+    out.offset_m = best->s;
+    out.fine = std::move(best->fine);
+    out.appearance = best->appearance;
   }
   out.unbracketed = out.offset_m != 0.0 && std::abs(std::abs(out.offset_m) - steps * o.step_m) < 1e-9;
   return out;

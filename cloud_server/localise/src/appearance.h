@@ -28,8 +28,10 @@ Appearance appearance(const MapSurface& surface, const FineResult& fine,
                       const std::vector<float>& brightness);
 
 struct SlideOptions {
-  double range_m = 0.3;             ///< offsets tried: -range .. range ...
-  double step_m = 0.02;             ///< ... in these steps
+  double range_m = 0.3;  ///< offsets tried: -range .. range ...
+  double step_m = 0.02;  ///< ... in these steps: first every coarse_stride-th over the
+                         ///< range, then every one within a stride of the best of those
+  int coarse_stride = 1;
   double margin_sd = 2.0;           ///< a gain within this many standard errors is no gain
   int min_points = 50;              ///< fewer inliers with a brightness: no evidence
   double min_fitness_ratio = 0.95;  ///< a slid pose keeps at least this share of the start's fitness
@@ -47,7 +49,8 @@ struct Slide {
 
 /// Where the geometry leaves a direction weakly held (a submap of one wall and the floor slides
 /// along the wall), the texture still holds it: the anchor moved by s * direction (unit) for s in
-/// [-range, range], the offset whose appearance correlation is highest, taken only when it beats
+/// [-range, range] (coarse to fine: SlideOptions::coarse_stride), the offset whose appearance
+/// correlation is highest, taken only when it beats
 /// the start's by margin_sd standard errors and keeps the geometric fit (min_fitness_ratio).
 /// Each pose is evaluated as it is (`fine` with no iterations).
 Slide slide_by_appearance(const MapSurface& surface, const std::vector<Eigen::Vector3d>& points,

@@ -51,9 +51,11 @@ LayerBalance balance_layer(const std::vector<Eigen::Vector3d>& points, int max_p
     return b;
   }
   b.capped = true;
-  const auto rest_n = std::min(rest.size(), static_cast<std::size_t>((1.0 - max_layer_share) * max_n));
+  constexpr double kEps = 1e-9;  // products that should be whole numbers are not quite
+  const auto rest_n =
+      std::min(rest.size(), static_cast<std::size_t>(std::floor((1.0 - max_layer_share) * max_n + kEps)));
   const auto want = static_cast<std::size_t>(
-      std::ceil(max_layer_share / (1.0 - max_layer_share) * static_cast<double>(rest_n)));
+      std::ceil(max_layer_share / (1.0 - max_layer_share) * static_cast<double>(rest_n) - kEps));
   const std::size_t layer_n = std::min(std::max(want, kMinLayerPoints), max_n - rest_n);
   spread(rest, rest_n, &b.points);
   spread(layer, layer_n, &b.points);

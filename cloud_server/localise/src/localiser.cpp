@@ -292,6 +292,7 @@ FineResult slide(const Localiser::Impl& m, const Prepared& p, FineResult f, doub
   SlideOptions so;
   so.range_m = o.appearance_slide_m;
   so.step_m = o.appearance_slide_step_m;
+  so.coarse_stride = o.appearance_slide_coarse_stride;
   so.margin_sd = o.appearance_margin_sd;
   so.min_points = o.appearance_min_points;
   const Slide s =

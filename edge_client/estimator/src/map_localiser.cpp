@@ -365,6 +365,7 @@ std::optional<Alignment> MapLocaliser::handle(const LocalisationReply& reply, Lo
   if (!candidates_.empty() && !independent(candidates_.back(), a)) {
     status_ = fmt::format(
         "answer {} ok and agrees, but from much the same data as the last one; waiting for new data", p.seq);
+    spdlog::info("localisation: {}", status_);
     return std::nullopt;
   }
   candidates_.push_back(a);

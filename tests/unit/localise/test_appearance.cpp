@@ -146,6 +146,22 @@ TEST(Appearance, ASlideTheGeometryCannotSeeIsUndoneByTheTexture) {
                                         FineOptions{}, SlideOptions{});
   EXPECT_TRUE(far.unbracketed);
   EXPECT_NEAR(far.offset_m, -0.3, 1e-9);
+  // Coarse to fine over a wider range (every third step first, as the indoor config): 14 and
+  // 40 cm back within a step, each matching the full search's offset.
+  SlideOptions wide;
+  wide.range_m = 1.0;
+  wide.coarse_stride = 3;
+  SlideOptions wide_full = wide;
+  wide_full.coarse_stride = 1;
+  for (const double d : {0.14, 0.4, -0.52}) {
+    const Eigen::Vector3d start = q.anchor_o + d * along;
+    const Slide s = slide_by_appearance(surface, pts, brightness, 0.0, start, along, FineOptions{}, wide);
+    const Slide full =
+        slide_by_appearance(surface, pts, brightness, 0.0, start, along, FineOptions{}, wide_full);
+    EXPECT_NEAR(s.offset_m, -d, 0.021) << d;
+    EXPECT_NEAR(s.offset_m, full.offset_m, 1e-9) << d;
+    EXPECT_FALSE(s.unbracketed) << d;
+  }
   // From the right pose nothing moves.
   const Slide stay =
       slide_by_appearance(surface, pts, brightness, 0.0, q.anchor_o, along, FineOptions{}, SlideOptions{});

@@ -2,7 +2,9 @@
 // centimetres, its covariance bounds the error; a bare rectangular room (symmetric under a
 // half turn) answers "ambiguous"; one wall answers "too little structure"; a submap of another
 // place answers "outside the map"; malformed requests answer "bad request"; a prior region
-// that misses the map answers "outside the map"; a map origin far from zero changes nothing.
+// that misses the map answers "outside the map"; a map origin far from zero changes nothing;
+// a best pose whose texture disagrees with the map is no answer; a view mostly of floor is
+// found with the floor capped in the coarse search.
 #include <algorithm>
 #include <random>
 
@@ -103,6 +105,57 @@ TEST(Localiser, TextureTellsABareRoomsHalfTurnApart) {
   // A map without intensity (constant) tells nothing either.
   const auto untextured = make(test::voxelise(samples, {0.03, 0.1}), o).localise(q);
   EXPECT_EQ(untextured.status, Status::kAmbiguous) << untextured.detail;
+}
+
+TEST(Localiser, ABestPoseWhoseTextureDisagreesIsNoAnswer) {
+  const auto samples = test::cluttered_room(14, 21).sample(0.01);
+  const auto map = test::voxelise(samples, {0.03, 0.1}, Eigen::Vector3d::Zero(), test::blob_albedo);
+  LocaliserOptions o;
+  o.appearance_weight = 0.5;
+  o.appearance_min = 0.4;
+  const Localiser loc = make(map, o);
+  const SE3d T_o_m = test::yaw_pose(0.7, {-1, 2, 0.3});
+  auto q = test::submap_request(samples, {3.0, 2.5, 1.3}, 4.0, 4000, 0.01, T_o_m, 5);
+  test::add_brightness(&q, T_o_m, test::blob_albedo, 6);
+  const auto r = loc.localise(q);
+  ASSERT_EQ(r.status, Status::kOk) << r.detail;
+  EXPECT_LT(pose_error(r.T_m_o, T_o_m.inverse(), q.anchor_o).m, 0.03);
+  // The same geometry with brightness unrelated to the map (shuffled): the geometry alone
+  // would answer (appearance_min -1), the texture's floor refuses it without a guess.
+  auto shuffled = q;
+  std::mt19937 rng(11);
+  std::shuffle(shuffled.brightness.begin(), shuffled.brightness.end(), rng);
+  const auto refused = loc.localise(shuffled);
+  EXPECT_EQ(refused.status, Status::kAmbiguous) << refused.detail;
+  EXPECT_EQ(refused.hypotheses, 0);
+  EXPECT_NE(refused.detail.find("appearance_min"), std::string::npos) << refused.detail;
+  o.appearance_min = -1.0;
+  const auto geometry = make(map, o).localise(shuffled);
+  EXPECT_EQ(geometry.status, Status::kOk) << geometry.detail;
+}
+
+TEST(Localiser, AViewMostlyOfFloorLocalisesWithTheFloorCapped) {
+  const test::Scene scene = test::cluttered_room(14, 21);
+  const auto samples = scene.sample(0.01);
+  // What a camera looking down sees: the floor around it, and little else (1 in 20 of the rest),
+  // with stereo-like noise. The cap must keep enough floor to fix the height and enough of the
+  // rest to place it (this room does not reproduce the report set's failure without the cap: an
+  // exact search finds it either way; the dumps of cloud_server/localise/README.md do).
+  const Eigen::Vector3d view(4.0, 3.0, 1.4);
+  std::vector<Eigen::Vector3d> seen;
+  int other = 0;
+  for (const auto& p : samples) {
+    if (p.z() < 0.005 ? (p - view).head<2>().norm() < 3.0 : (other++ % 20 == 0)) seen.push_back(p);
+  }
+  const SE3d T_o_m = test::yaw_pose(-2.0, {0.5, -1, 0.2});
+  const auto q = test::submap_request(seen, view, 4.0, 5000, 0.03, T_o_m, 8);
+  LocaliserOptions o;
+  o.coarse_layer_share = 0.3;
+  const auto r = make(test::voxelise(samples, {0.03, 0.1}), o).localise(q);
+  ASSERT_EQ(r.status, Status::kOk) << r.detail;
+  const Error e = pose_error(r.T_m_o, T_o_m.inverse(), q.anchor_o);
+  EXPECT_LT(e.m, 0.03);
+  EXPECT_LT(e.deg, 0.5);
 }
 
 TEST(Localiser, OneWallIsTooLittleStructure) {

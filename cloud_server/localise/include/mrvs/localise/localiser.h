@@ -73,10 +73,11 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
   /// ways) to where the appearance correlates best, when that beats where it stopped by the
   /// margin (a submap of one wall and the floor slides along the wall); 0: never.
   double appearance_slide_m = 0.0;
-  double appearance_slide_step_m = 0.02;  ///< ... in these steps
-  double covariance_inflation = 25.0;     ///< variance factor on the information matrix's inverse
-  double max_sigma_m = 0.1;               ///< a less certain translation: too little structure, m
-  double max_sigma_deg = 1.0;             ///< a less certain yaw: too little structure, deg
+  double appearance_slide_step_m = 0.02;   ///< ... in these steps
+  int appearance_slide_coarse_stride = 1;  ///< first every this many steps, then the steps around the best
+  double covariance_inflation = 25.0;      ///< variance factor on the information matrix's inverse
+  double max_sigma_m = 0.1;                ///< a less certain translation: too little structure, m
+  double max_sigma_deg = 1.0;              ///< a less certain yaw: too little structure, deg
 
   template <class V>
   void visit(V& v) {
@@ -136,6 +137,8 @@ struct LocaliserOptions : config::OptionsEquality<LocaliserOptions> {
     v("appearance_slide_m", appearance_slide_m, in_range(0.0, 10.0),
       "largest slide of a pose along its weakest horizontal direction by the appearance, m (0: none)");
     v("appearance_slide_step_m", appearance_slide_step_m, in_range(0.001, 1.0), "... in these steps, m");
+    v("appearance_slide_coarse_stride", appearance_slide_coarse_stride, in_range(1, 100),
+      "the slide tries every this many steps first, then the steps around the best");
     v("covariance_inflation", covariance_inflation, in_range(1.0, 1e6), "variance factor of the covariance");
     v("max_sigma_m", max_sigma_m, in_range(0.0001, 100.0), "largest translation sd of an answer, m");
     v("max_sigma_deg", max_sigma_deg, in_range(0.001, 180.0), "largest yaw sd of an answer, deg");
