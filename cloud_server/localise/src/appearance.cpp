@@ -90,7 +90,7 @@ Slide slide_by_appearance(const MapSurface& surface, const std::vector<Eigen::Ve
   if (out.start.points < o.min_points || !(o.step_m > 0.0) || !(o.range_m > 0.0)) return out;
   const double start_fitness = out.fine.fitness;
   const int steps = static_cast<int>(std::floor(o.range_m / o.step_m + 1e-9));
-  // Coarse to fine: every kSlideCoarse-th step over the range, then the steps around the best.
+  // Coarse to fine: every coarse_stride-th step over the range, then the steps around the best.
   std::optional<SlideProbe> best;
   const auto consider = [&](int k) {
     if (k == 0 || std::abs(k) > steps) return;
