@@ -104,11 +104,7 @@ TexturedRoom textured_room() {
 }
 
 TEST(Appearance, InliersFollowTheMapsTextureOnlyWhereThePoseIsRight) {
-  TexturedRoom room = textured_room();
-  const MapSurface& surface = room.surface;
-  const localisation::Request& q = room.q;
-  const std::vector<Eigen::Vector3d>& pts = room.pts;
-  std::vector<float>& brightness = room.brightness;
+  auto [surface, q, pts, brightness] = textured_room();
   FineOptions o;
   o.iterations = 0;  // evaluate the given poses as they are
   const FineResult right = refine_pose(surface, pts, 0.0, q.anchor_o, o);
@@ -128,11 +124,7 @@ TEST(Appearance, InliersFollowTheMapsTextureOnlyWhereThePoseIsRight) {
 // A pose slid 14 cm along x (as the fine stage slides along a wall it cannot tell apart) is
 // brought back by the texture within a step; with brightness unrelated to the map it stays.
 TEST(Appearance, ASlideTheGeometryCannotSeeIsUndoneByTheTexture) {
-  TexturedRoom room = textured_room();
-  const MapSurface& surface = room.surface;
-  const localisation::Request& q = room.q;
-  const std::vector<Eigen::Vector3d>& pts = room.pts;
-  std::vector<float>& brightness = room.brightness;
+  auto [surface, q, pts, brightness] = textured_room();
   const Eigen::Vector3d along = Eigen::Vector3d::UnitX();
   const Eigen::Vector3d off = q.anchor_o + 0.14 * along;
   const Slide back =
