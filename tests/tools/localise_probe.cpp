@@ -42,6 +42,7 @@ struct Args {
   bool per_request = false;
   std::string dump;
   std::string replay;
+  int repeat = 1;
   std::string output;
   bool until_localised = false;
   int frames = 0;
@@ -153,7 +154,10 @@ int replay(const Args& a) {
       fmt::print(stderr, "localise_probe: {} (see --dump)\n", std::string(d.status().message()));
       return mrvs::kExitDataError;
     }
-    const auto r = cloud->localiser->localise(d->request);
+    auto r = cloud->localiser->localise(d->request);
+    std::vector<double> runs{r.time_ms};
+    for (int k = 1; k < a.repeat; ++k) runs.push_back(cloud->localiser->localise(d->request).time_ms);
+    r.time_ms = mrvs::quantile(runs, 0.5);
     const SE3d at(mrvs::Quatd::Identity(), d->request.anchor_o);
     const Error e = pose_error(r.T_m_o * at, d->truth * at);
     const bool is_ok = r.status == mrvs::localisation::Status::kOk;
@@ -326,6 +330,9 @@ int main(int argc, char** argv) {
   app.add_option("--set", a.overrides, "Edge option override, e.g. estimator.localisation.window_s=2");
   app.add_option("--map-set", a.map_overrides, "Cloud option override, e.g. localise.inlier_m=0.08");
   app.add_option("--frames", a.frames, "Frames to run (0 = all)");
+  app.add_option("--repeat", a.repeat,
+                 "--replay: localise each request this many times, report the median time")
+      ->check(CLI::Range(1, 1000));
   app.add_flag("--per-request", a.per_request, "One line per localisation request");
   app.add_option("--dump", a.dump,
                  "Folder for one text file per request: true and answered T_map_odom, the points");

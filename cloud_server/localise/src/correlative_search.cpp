@@ -1,6 +1,7 @@
 #include "correlative_search.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -57,39 +58,98 @@ class Search {
  private:
   std::size_t num_points() const { return rotated_.empty() ? 0 : rotated_.front().offsets.size(); }
 
-  /// The window's bound: the sum of the level's values at its points. A window that cannot
-  /// beat `limit` (the sum so far plus 255 for every point left is at most it) stops early with
-  /// that looser, still valid, bound: it is pruned either way.
+  /// The window's bound: the sum of the level's values at its points, stopped (with a looser,
+  /// still valid, bound) once it cannot beat `limit` even with 255 at every point left.
   Candidate scored(Candidate c, int limit) {
-    const RotatedPoints& rp = rotated_[static_cast<std::size_t>(c.yaw)];
-    const std::size_t n = rp.offsets.size();
-    constexpr std::size_t kBlock = 64;
-    int sum = 0;
-    if (grid_.covers(c.cell + rp.lo, c.cell + rp.hi)) {
-      // Every point's cell is stored: no bounds check per point.
-      const std::uint8_t* base =
-          grid_.data(c.level) + grid_.linear(c.cell + Eigen::Vector3i::Constant(grid_.pad()));
-      for (std::size_t i = 0; i < n; ++i) {
-        sum += base[rp.linear[i]];
-        if ((i + 1) % kBlock == 0 && sum + 255 * static_cast<int>(n - i - 1) <= limit) {
-          sum += 255 * static_cast<int>(n - i - 1);
-          c.exact = false;
-          break;
-        }
-      }
+    std::array<Candidate, 8> one{c};
+    score_windows(one.data(), 1, c.level, nullptr, limit);
+    return one[0];
+  }
+
+  /// The window's (up to 8) children inside the search window, scored in one pass over the
+  /// points and stopped much sooner than alone: a child's value at a point is at most its
+  /// parent's (the parent's level max-pools over the child's cells), so what a child can still
+  /// gain is what the parent's values at the points left add up to, not 255 each. An expanded
+  /// parent was scored in full (a stopped one is pruned), so its score is that sum.
+  std::vector<Candidate> scored_children(const Candidate& parent, int limit) {
+    const int half = 1 << (parent.level - 1);
+    std::array<Candidate, 8> children{};
+    std::size_t k = 0;
+    for (int i = 0; i < 8; ++i) {
+      const Eigen::Vector3i cell = parent.cell + Eigen::Vector3i(i & 1, (i >> 1) & 1, (i >> 2) & 1) * half;
+      if ((cell.array() > window_.anchor_max.array()).any()) continue;
+      children[k++] = {parent.yaw, cell, parent.level - 1, 0};
+    }
+    score_windows(children.data(), k, parent.level - 1, parent.exact ? &parent : nullptr, limit);
+    return {children.begin(), children.begin() + static_cast<std::ptrdiff_t>(k)};
+  }
+
+  /// Scores k windows of one yaw at `level` (their cells within 2^level of the first's), with
+  /// `parent` (the window one level up holding them all, scored in full) bounding what is left,
+  /// or 255 per point without one. Where the grid stores every point's cell the values are read
+  /// at the points' linear offsets; elsewhere (most windows: a submap spans metres) at their
+  /// cells clamped into the grid, which read 0 outside (LikelihoodPyramid::clamped_linear).
+  void score_windows(Candidate* w, std::size_t k, int level, const Candidate* parent, int limit) {
+    const RotatedPoints& rp = rotated_[static_cast<std::size_t>(w[0].yaw)];
+    Eigen::Vector3i lo = w[0].cell, hi = w[0].cell;
+    for (std::size_t j = 0; j < k; ++j) {
+      lo = lo.cwiseMin(w[j].cell);
+      hi = hi.cwiseMax(w[j].cell);
+    }
+    if (parent) lo = lo.cwiseMin(parent->cell);
+    const Eigen::Vector3i pad = Eigen::Vector3i::Constant(grid_.pad());
+    if (grid_.covers(lo + rp.lo, hi + rp.hi)) {
+      std::array<const std::uint8_t*, 9> base{};
+      for (std::size_t j = 0; j < k; ++j) base[j] = grid_.data(level) + grid_.linear(w[j].cell + pad);
+      if (parent) base[8] = grid_.data(parent->level) + grid_.linear(parent->cell + pad);
+      score_pass(w, k, parent, limit, [&](std::size_t i, std::size_t j) { return base[j][rp.linear[i]]; });
     } else {
-      for (std::size_t i = 0; i < n; ++i) {
-        sum += grid_.value(c.level, c.cell + rp.offsets[i]);
-        if ((i + 1) % kBlock == 0 && sum + 255 * static_cast<int>(n - i - 1) <= limit) {
-          sum += 255 * static_cast<int>(n - i - 1);
-          c.exact = false;
-          break;
+      std::array<const std::uint8_t*, 9> values{};
+      std::array<Eigen::Vector3i, 9> cell{};
+      for (std::size_t j = 0; j < k; ++j) {
+        values[j] = grid_.data(level);
+        cell[j] = w[j].cell;
+      }
+      if (parent) {
+        values[8] = grid_.data(parent->level);
+        cell[8] = parent->cell;
+      }
+      score_pass(w, k, parent, limit, [&](std::size_t i, std::size_t j) {
+        return values[j][grid_.clamped_linear(cell[j] + rp.offsets[i])];
+      });
+    }
+    nodes_ += static_cast<long long>(k);
+  }
+
+  /// The pass itself: read(i, j) is window j's value at point i (j = 8: the parent's).
+  template <typename Read>
+  void score_pass(Candidate* w, std::size_t k, const Candidate* parent, int limit, Read read) {
+    constexpr std::size_t kBlock = 16;  // points between checks whether a window can still win
+    std::array<int, 8> sum{};
+    std::array<std::size_t, 8> active{};
+    for (std::size_t j = 0; j < k; ++j) active[j] = j;
+    std::size_t live = k;
+    const std::size_t n = num_points();
+    int rest = parent ? parent->score : 255 * static_cast<int>(n);  // the most the points left can add
+    for (std::size_t start = 0; start < n && live > 0; start += kBlock) {
+      const std::size_t end = std::min(n, start + kBlock);
+      for (std::size_t i = start; i < end; ++i) {
+        rest -= parent ? read(i, 8) : 255;
+        for (std::size_t a = 0; a < live; ++a) sum[active[a]] += read(i, active[a]);
+      }
+      if (end == n) break;
+      for (std::size_t a = 0; a < live;) {
+        const std::size_t j = active[a];
+        if (sum[j] + rest > limit) {
+          ++a;
+          continue;
         }
+        sum[j] += rest;  // cannot beat the limit: pruned either way, with this looser bound
+        w[j].exact = false;
+        active[a] = active[--live];
       }
     }
-    c.score = sum;
-    ++nodes_;
-    return c;
+    for (std::size_t j = 0; j < k; ++j) w[j].score = sum[j];
   }
 
   /// What a window must beat to matter: the last kept hypothesis once the list is full.
@@ -116,13 +176,7 @@ class Search {
         if (exact.score > threshold()) leaf(exact);
         continue;
       }
-      std::vector<Candidate> children;
-      const int half = 1 << (c.level - 1);
-      for (int i = 0; i < 8; ++i) {
-        const Eigen::Vector3i cell = c.cell + Eigen::Vector3i(i & 1, (i >> 1) & 1, (i >> 2) & 1) * half;
-        if ((cell.array() > window_.anchor_max.array()).any()) continue;
-        children.push_back(scored({c.yaw, cell, c.level - 1, 0}, threshold()));
-      }
+      std::vector<Candidate> children = scored_children(c, threshold());
       descend(children);
     }
   }

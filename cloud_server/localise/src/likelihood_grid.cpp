@@ -12,8 +12,11 @@ LikelihoodPyramid LikelihoodPyramid::build(const std::vector<Eigen::Vector3f>& p
   g.origin_ = box.min();
   g.resolution_ = resolution;
   g.size_ = (box.sizes() / resolution).array().ceil().cast<int>().cwiseMax(1);
-  g.pad_ = (1 << (std::max(levels, 1) - 1)) - 1;
-  g.padded_ = g.size_ + Eigen::Vector3i::Constant(g.pad_);
+  // Below the grid, 2^(levels-1) cells of zeros: a window starting there is stored, and a cell
+  // clamped into the grid reads 0 on every level, as does one clamped into the zero layer
+  // above it (clamped_linear).
+  g.pad_ = 1 << (std::max(levels, 1) - 1);
+  g.padded_ = g.size_ + Eigen::Vector3i::Constant(g.pad_ + 1);
   const std::size_t n = static_cast<std::size_t>(g.padded_.prod());
   g.levels_.assign(static_cast<std::size_t>(std::max(levels, 1)), {});
   std::vector<std::uint8_t>& base = g.levels_[0];

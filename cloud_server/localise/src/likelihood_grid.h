@@ -40,6 +40,14 @@ class LikelihoodPyramid {
   std::ptrdiff_t linear(const Eigen::Vector3i& q) const {
     return (static_cast<std::ptrdiff_t>(q.z()) * padded_.y() + q.y()) * padded_.x() + q.x();
   }
+  /// linear() of base cell c clamped into the padded grid, per axis: a cell outside the grid
+  /// reads 0 on every level, as value() does (below, level h's 2^h cells from the padding's
+  /// first lie in the padding; above, the zero layer's window holds only itself).
+  std::ptrdiff_t clamped_linear(const Eigen::Vector3i& c) const {
+    const Eigen::Vector3i q =
+        (c + Eigen::Vector3i::Constant(pad_)).cwiseMax(0).cwiseMin(padded_ - Eigen::Vector3i::Ones());
+    return linear(q);
+  }
   /// Whether every base cell of the box [lo, hi] is stored (padded cells included).
   bool covers(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) const {
     const Eigen::Vector3i a = lo + Eigen::Vector3i::Constant(pad_), b = hi + Eigen::Vector3i::Constant(pad_);
@@ -65,8 +73,8 @@ class LikelihoodPyramid {
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  ///< min corner of base cell (0, 0, 0), map-local
   double resolution_ = 1.0;
   Eigen::Vector3i size_ = Eigen::Vector3i::Zero();    ///< base cells per axis
-  int pad_ = 0;                                       ///< cells below 0 kept per axis: 2^(levels-1) - 1
-  Eigen::Vector3i padded_ = Eigen::Vector3i::Zero();  ///< size_ + pad_
+  int pad_ = 0;                                       ///< cells below 0 kept per axis: 2^(levels-1)
+  Eigen::Vector3i padded_ = Eigen::Vector3i::Zero();  ///< size_ + pad_ + a zero layer above
   std::vector<std::vector<std::uint8_t>> levels_;
   std::size_t occupied_ = 0;
 };

@@ -59,5 +59,32 @@ TEST(LikelihoodPyramid, EveryLevelIsTheMaximumOverItsWindow) {
   }
 }
 
+TEST(LikelihoodPyramid, ACellClampedIntoTheGridReadsWhatValueReads) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.5f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < 60; ++i) pts.emplace_back(u(rng), u(rng), 0.5f * u(rng));
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-1, -1, -0.5), Eigen::Vector3d(1.5, 1.5, 0.75));
+  for (int levels : {1, 2, 4}) {
+    const auto g = LikelihoodPyramid::build(pts, box, 0.1, levels, 1.0);
+    const Eigen::Vector3i n = g.size();
+    const int far = (1 << levels) + 3;
+    int nonzero = 0;
+    for (int h = 0; h < levels; ++h) {
+      for (int z = -far; z < n.z() + far; ++z) {
+        for (int y = -far; y < n.y() + far; ++y) {
+          for (int x = -far; x < n.x() + far; ++x) {
+            const Eigen::Vector3i c(x, y, z);
+            ASSERT_EQ(g.data(h)[g.clamped_linear(c)], g.value(h, c))
+                << levels << " levels, level " << h << ": " << x << " " << y << " " << z;
+            nonzero += g.value(h, c) > 0;
+          }
+        }
+      }
+    }
+    EXPECT_GT(nonzero, 0);
+  }
+}
+
 }  // namespace
 }  // namespace mrvs::localise
