@@ -26,10 +26,11 @@ double exact_score(const LikelihoodPyramid& g, const std::vector<Eigen::Vector3d
   return s / (255.0 * pts.size());
 }
 
-double exhaustive_best(const LikelihoodPyramid& g, const std::vector<Eigen::Vector3d>& pts,
-                       const SearchWindow& w) {
+/// Every pose's score on the lattice, best first, by brute force.
+std::vector<int> exhaustive_scores(const LikelihoodPyramid& g, const std::vector<Eigen::Vector3d>& pts,
+                                   const SearchWindow& w) {
   const int yaws = static_cast<int>(std::ceil(2.0 * kPi / w.yaw_step_rad));
-  int best = 0;
+  std::vector<int> all;
   for (int k = 0; k < yaws; ++k) {
     const Eigen::Matrix3d R =
         Eigen::AngleAxisd(2.0 * kPi * k / yaws, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -42,10 +43,16 @@ double exhaustive_best(const LikelihoodPyramid& g, const std::vector<Eigen::Vect
         for (int x = w.anchor_min.x(); x <= w.anchor_max.x(); ++x) {
           int s = 0;
           for (const auto& o : off) s += g.value(0, Eigen::Vector3i(x, y, z) + o);
-          best = std::max(best, s);
+          all.push_back(s);
         }
   }
-  return best / (255.0 * pts.size());
+  std::sort(all.rbegin(), all.rend());
+  return all;
+}
+
+double exhaustive_best(const LikelihoodPyramid& g, const std::vector<Eigen::Vector3d>& pts,
+                       const SearchWindow& w) {
+  return exhaustive_scores(g, pts, w).front() / (255.0 * pts.size());
 }
 
 TEST(CorrelativeSearch, BestScoreEqualsTheExhaustiveSearch) {
@@ -79,30 +86,6 @@ TEST(CorrelativeSearch, BestScoreEqualsTheExhaustiveSearch) {
   for (const Hypothesis& h : hyps) EXPECT_NEAR(h.score, exact_score(g, pts, h.yaw, h.anchor), 1e-12);
   const long long cells = (w.anchor_max - w.anchor_min + Eigen::Vector3i::Ones()).prod();
   EXPECT_LT(stats.nodes, cells * stats.yaws / 4) << "the bound prunes";
-}
-
-/// Every pose's score on the lattice, best first, by brute force.
-std::vector<int> exhaustive_scores(const LikelihoodPyramid& g, const std::vector<Eigen::Vector3d>& pts,
-                                   const SearchWindow& w) {
-  const int yaws = static_cast<int>(std::ceil(2.0 * kPi / w.yaw_step_rad));
-  std::vector<int> all;
-  for (int k = 0; k < yaws; ++k) {
-    const Eigen::Matrix3d R =
-        Eigen::AngleAxisd(2.0 * kPi * k / yaws, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    std::vector<Eigen::Vector3i> off;
-    for (const auto& p : pts) {
-      off.push_back(((R * p) / g.resolution() + Eigen::Vector3d::Constant(0.5)).array().floor().cast<int>());
-    }
-    for (int z = w.anchor_min.z(); z <= w.anchor_max.z(); ++z)
-      for (int y = w.anchor_min.y(); y <= w.anchor_max.y(); ++y)
-        for (int x = w.anchor_min.x(); x <= w.anchor_max.x(); ++x) {
-          int s = 0;
-          for (const auto& o : off) s += g.value(0, Eigen::Vector3i(x, y, z) + o);
-          all.push_back(s);
-        }
-  }
-  std::sort(all.rbegin(), all.rend());
-  return all;
 }
 
 TEST(CorrelativeSearch, TheBestPosesAreTheExhaustiveSearchsWherePointsLeaveTheGrid) {

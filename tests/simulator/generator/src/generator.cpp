@@ -1,5 +1,7 @@
 #include "mrvs/sim/generator.h"
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <future>
@@ -125,6 +127,52 @@ std::string map_comment(const GeneratorRequest& r) {
                      generator_version(), profile_name(r.profile), r.options.seed);
 }
 
+/// Body poses over frame k's exposure (render.motion_blur; centred on its true time, within
+/// the spline's support), as many as the faster-moving camera needs (exposure_samples); one,
+/// the frame's pose, without blur.
+StatusOr<std::vector<SE3d>> exposure_poses(const StereoRenderer& renderer, const World& world,
+                                           std::int64_t k) {
+  const RenderOptions& o = renderer.options();
+  const SE3d& T_w_b = world.frame_pose(static_cast<std::size_t>(k));
+  if (!o.motion_blur) return std::vector<SE3d>{T_w_b};
+  const TimestampNs t = world.grid.camera_true_ns[static_cast<std::size_t>(k)];
+  const DurationNs half = static_cast<DurationNs>(std::llround(0.5e6 * o.exposure_ms));
+  const TimestampNs a = std::max(t - half, world.spline->support_begin_ns());
+  const TimestampNs b = std::min(t + half, world.spline->support_end_ns());
+  MRVS_ASSIGN_OR_RETURN(const Kinematics start, world.spline->evaluate(a));
+  MRVS_ASSIGN_OR_RETURN(const Kinematics end, world.spline->evaluate(b));
+  int n = 1;
+  for (int c = 0; c < 2; ++c) {
+    n = std::max(
+        n, renderer.exposure_samples(c, renderer.camera_pose(c, start.T_w_b),
+                                     renderer.camera_pose(c, end.T_w_b), o.blur_step_px, o.blur_max_samples));
+  }
+  if (n == 1) return std::vector<SE3d>{T_w_b};
+  std::vector<SE3d> poses;
+  for (int i = 0; i < n; ++i) {  // the middles of n equal parts of the exposure
+    const TimestampNs ti =
+        a + static_cast<DurationNs>(std::llround((i + 0.5) * static_cast<double>(b - a) / n));
+    MRVS_ASSIGN_OR_RETURN(const Kinematics kin, world.spline->evaluate(ti));
+    poses.push_back(kin.T_w_b);
+  }
+  return poses;
+}
+
+/// Both images of frame k, integrated over its exposure (exposure_poses).
+StatusOr<std::array<cv::Mat, 2>> render_frame(const StereoRenderer& renderer, const World& world,
+                                              std::int64_t k, double gain) {
+  MRVS_ASSIGN_OR_RETURN(const std::vector<SE3d> body, exposure_poses(renderer, world, k));
+  if (body.size() == 1) return renderer.render_stereo(body.front(), FrameInfo{k, gain});
+  std::array<cv::Mat, 2> images;
+  for (int c = 0; c < 2; ++c) {
+    std::vector<SE3d> cam;
+    for (const SE3d& T_w_b : body) cam.push_back(renderer.camera_pose(c, T_w_b));
+    MRVS_RETURN_IF_ERROR(
+        renderer.render_exposure(c, cam, FrameInfo{k, gain}, &images[static_cast<std::size_t>(c)]));
+  }
+  return images;
+}
+
 /// Renders every frame; PNG encoding of frame k overlaps the rendering of frame k + 1.
 Status render_frames(const StereoRenderer& renderer, const World& world, const fs::path& mav0,
                      std::uint64_t seed, const ProgressCallback& progress,
@@ -133,8 +181,7 @@ Status render_frames(const StereoRenderer& renderer, const World& world, const f
   const std::vector<double> gains = exposure_gains(seed, n, renderer.options());
   std::future<Status> pending;
   for (std::int64_t k = 0; k < n; ++k) {
-    const SE3d& T_w_b = world.frame_pose(static_cast<std::size_t>(k));
-    auto images = renderer.render_stereo(T_w_b, FrameInfo{k, gains[k]});
+    auto images = render_frame(renderer, world, k, gains[k]);
     if (!images.ok()) return with_context(images.status(), fmt::format("rendering frame {}", k));
     if (pending.valid()) MRVS_RETURN_IF_ERROR(pending.get());
     const TimestampNs stamp = world.grid.camera_stamp_ns[k];

@@ -11,6 +11,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "generated_sequence.h"
@@ -269,6 +270,47 @@ TEST_F(GeneratedIndoor, AnotherSeedChangesImagesImuAndMap) {
     ASSERT_EQ((*gt_a)[k].T_w_b.matrix(), (*gt_b)[k].T_w_b.matrix()) << k;
   }
   EXPECT_NE(gt_a->back().bias_accel, gt_b->back().bias_accel);
+}
+
+TEST_F(GeneratedIndoor, MotionBlurChangesOnlyTheImagesAndIsDeterministic) {
+  GeneratorRequest r = test::indoor_request(dir_->path() / "blur");
+  r.options.render.motion_blur = true;
+  r.options.render.exposure_ms = 10.0;
+  ASSERT_TRUE(generate_dataset(r).ok());
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  r.out = dir_->path() / "blur_again";
+  const auto again = generate_dataset(r);
+  omp_set_num_threads(threads);
+  ASSERT_TRUE(again.ok()) << again.status();
+  const auto sharp = test::read_tree(dir_->path() / "seq");
+  const auto blur = test::read_tree(dir_->path() / "blur");
+  EXPECT_TRUE(blur == test::read_tree(dir_->path() / "blur_again"));
+  ASSERT_EQ(sharp.size(), blur.size());
+  int images = 0, blurred = 0;
+  double sharp_gradient = 0.0, blur_gradient = 0.0;  // blur removes image gradient
+  for (const auto& [name, bytes] : sharp) {
+    ASSERT_TRUE(blur.count(name)) << name;
+    if (name.rfind(".png") != name.size() - 4) {
+      if (name != "sim0/config.yaml" && name != "sim0/request.yaml") {
+        EXPECT_TRUE(bytes == blur.at(name)) << name;
+      }
+      continue;
+    }
+    ++images;
+    blurred += bytes != blur.at(name);
+    const cv::Mat a = cv::imread((dir_->path() / "seq" / name).string(), cv::IMREAD_GRAYSCALE);
+    const cv::Mat b = cv::imread((dir_->path() / "blur" / name).string(), cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(a.empty() || b.empty()) << name;
+    cv::Mat ga, gb;
+    cv::Sobel(a, ga, CV_32F, 1, 0);
+    cv::Sobel(b, gb, CV_32F, 1, 0);
+    sharp_gradient += cv::norm(ga, cv::NORM_L1);
+    blur_gradient += cv::norm(gb, cv::NORM_L1);
+  }
+  EXPECT_EQ(images, 2 * static_cast<int>(world_->grid.camera_true_ns.size()));
+  EXPECT_GT(blurred, images / 2) << "V1_01 moves at 20 s: most frames blur over 10 ms";
+  EXPECT_LT(blur_gradient, sharp_gradient);
 }
 
 // Bad input: a clear error, nothing at --out, no staging folder left in its parent.

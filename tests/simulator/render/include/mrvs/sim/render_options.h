@@ -1,7 +1,7 @@
 #pragma once
 // Tuning of the stereo image renderer (simulator.md section 4.3 and the photometric knobs
 // of section 7). Defaults: adaptive anti-aliasing, no noise, no vignetting, equal camera
-// gains, fixed exposure.
+// gains, fixed exposure, no motion blur.
 #include "mrvs/config/options.h"
 
 namespace mrvs::sim {
@@ -26,6 +26,10 @@ struct RenderOptions : config::OptionsEquality<RenderOptions> {
   bool exposure_walk = false;                 ///< per-frame log-gain random walk (exposure_gains)
   double exposure_sigma = 0.02;               ///< log-gain step per frame
   double exposure_limit = 0.3;                ///< gain stays within 1 -+ this
+  bool motion_blur = false;   ///< integrate each image over its exposure along the true motion
+  double exposure_ms = 5.0;   ///< exposure (global shutter), centred on the frame's time, ms
+  double blur_step_px = 1.0;  ///< the exposure's sub-samples move the image at most this far apart, px
+  int blur_max_samples = 32;  ///< at most this many sub-samples per image
 
   template <class V>
   void visit(V& v) {
@@ -45,6 +49,10 @@ struct RenderOptions : config::OptionsEquality<RenderOptions> {
     v("exposure_walk", exposure_walk, any(), "per-frame log-gain random walk shared by both cameras");
     v("exposure_sigma", exposure_sigma, in_range(0.0, 1.0), "log-gain step per frame");
     v("exposure_limit", exposure_limit, in_range(0.0, 0.9), "gain stays within 1 -+ this");
+    v("motion_blur", motion_blur, any(), "integrate each image over its exposure along the true motion");
+    v("exposure_ms", exposure_ms, in_range(0.01, 50.0), "exposure, centred on the frame's time, ms");
+    v("blur_step_px", blur_step_px, in_range(0.05, 10.0), "image motion between two sub-samples at most, px");
+    v("blur_max_samples", blur_max_samples, in_range(1, 256), "sub-samples per image at most");
   }
 };
 

@@ -83,6 +83,16 @@ class StereoRenderer {
   /// Both cameras at body pose T_w_b (one after the other, each with all threads).
   StatusOr<std::array<cv::Mat, 2>> render_stereo(const SE3d& T_w_b, const FrameInfo& frame) const;
 
+  /// Camera `cam` integrated over its exposure (motion blur): the mean radiance of the poses
+  /// T_w_c (the exposure's sub-samples, evenly spaced in time), then the DN mapping. One pose:
+  /// render(). InvalidArgument for none, a non-finite one or a bad camera index.
+  Status render_exposure(int cam, const std::vector<SE3d>& T_w_c, const FrameInfo& frame,
+                         cv::Mat* image) const;
+  /// Sub-samples an exposure of camera `cam` from pose T_w_a to T_w_b needs for no surface
+  /// point seen at a 9 x 7 grid of pixels (the sky: its direction) to move more than step_px
+  /// between two: ceil(largest motion / step_px), in [1, max_samples].
+  int exposure_samples(int cam, const SE3d& T_w_a, const SE3d& T_w_b, double step_px, int max_samples) const;
+
   /// Radiance in [0, 1] before the DN mapping (CV_32F), as the image render computes it.
   StatusOr<cv::Mat> render_radiance(int cam, const SE3d& T_w_c) const;
   /// Depth, face id, face (u, v) and mip level of every pixel centre ray.
