@@ -4,11 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include <fmt/format.h>
-
-#include "mrvs/sim/photometry.h"
 #include "mrvs/sim/stereo_renderer.h"
-#include "render_internal.h"
 
 namespace mrvs::sim {
 
@@ -16,7 +12,6 @@ Status StereoRenderer::render_exposure(int cam, const std::vector<SE3d>& T_w_c, 
                                        cv::Mat* image) const {
   if (T_w_c.empty()) return absl::InvalidArgumentError("StereoRenderer::render_exposure: no pose");
   if (T_w_c.size() == 1) return render(cam, T_w_c.front(), frame, image);
-  if (image == nullptr) return absl::InvalidArgumentError("StereoRenderer::render_exposure: image is null");
   std::vector<float> sum;
   for (const SE3d& T : T_w_c) {
     MRVS_ASSIGN_OR_RETURN(const cv::Mat radiance, render_radiance(cam, T));
@@ -24,17 +19,7 @@ Status StereoRenderer::render_exposure(int cam, const std::vector<SE3d>& T_w_c, 
     const float* r = radiance.ptr<float>(0);  // continuous: made by render_radiance
     for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += r[i];
   }
-  const float inv = 1.0f / static_cast<float>(T_w_c.size());
-  const int w = camera(cam).width(), h = camera(cam).height();
-  const PixelPhotometry photometry(options_, camera(cam), cam, frame.index, frame.gain, noise_seed_);
-  image->create(h, w, CV_8UC1);
-#pragma omp parallel for schedule(dynamic, 8)
-  for (int v = 0; v < h; ++v) {
-    std::uint8_t* row = image->ptr<std::uint8_t>(v);
-    const float* s = sum.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(w);
-    for (int u = 0; u < w; ++u) row[u] = photometry.dn(s[u] * inv, u, v);
-  }
-  return absl::OkStatus();
+  return to_image(cam, frame, sum, 1.0f / static_cast<float>(T_w_c.size()), image);
 }
 
 int StereoRenderer::exposure_samples(int cam, const SE3d& T_w_a, const SE3d& T_w_b, double step_px,

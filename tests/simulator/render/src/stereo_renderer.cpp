@@ -160,24 +160,30 @@ StatusOr<cv::Mat> StereoRenderer::render_radiance(int cam, const SE3d& T_w_c) co
 
 Status StereoRenderer::render(int cam, const SE3d& T_w_c, const FrameInfo& frame, cv::Mat* image) const {
   MRVS_RETURN_IF_ERROR(check_request(cam, T_w_c));
-  if (image == nullptr) return absl::InvalidArgumentError("StereoRenderer::render: image is null");
-  if (!std::isfinite(frame.gain) || frame.gain < 0.0) {
-    return absl::InvalidArgumentError(
-        fmt::format("StereoRenderer::render: frame gain {} is not >= 0", frame.gain));
-  }
   const View view = make_view(cam, T_w_c);
   const int w = view.table->width(), h = view.table->height();
   std::vector<float> radiance(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
   std::vector<int> faces(radiance.size(), -1);
   render_pass(view, &radiance, &faces);
   if (options_.aa == AntiAliasing::kAdaptive) refine_edges(view, faces, &radiance);
+  return to_image(cam, frame, radiance, 1.0f, image);
+}
+
+Status StereoRenderer::to_image(int cam, const FrameInfo& frame, const std::vector<float>& radiance,
+                                float scale, cv::Mat* image) const {
+  if (image == nullptr) return absl::InvalidArgumentError("StereoRenderer::render: image is null");
+  if (!std::isfinite(frame.gain) || frame.gain < 0.0) {
+    return absl::InvalidArgumentError(
+        fmt::format("StereoRenderer::render: frame gain {} is not >= 0", frame.gain));
+  }
+  const int w = camera(cam).width(), h = camera(cam).height();
   const PixelPhotometry photometry(options_, camera(cam), cam, frame.index, frame.gain, noise_seed_);
   image->create(h, w, CV_8UC1);
 #pragma omp parallel for schedule(dynamic, 8)
   for (int v = 0; v < h; ++v) {
     std::uint8_t* row = image->ptr<std::uint8_t>(v);
     const float* rad = radiance.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(w);
-    for (int u = 0; u < w; ++u) row[u] = photometry.dn(rad[u], u, v);
+    for (int u = 0; u < w; ++u) row[u] = photometry.dn(rad[u] * scale, u, v);
   }
   return absl::OkStatus();
 }

@@ -127,6 +127,9 @@ class StereoRenderer {
   float sky_or_albedo(const View& view, const Eigen::Vector3f& d_w, float lod_scale) const;
   void render_pass(const View& view, std::vector<float>* radiance, std::vector<int>* faces) const;
   void refine_edges(const View& view, const std::vector<int>& faces, std::vector<float>* radiance) const;
+  /// The DN image of camera `cam` from its radiance (row-major) times `scale` (photometry.h).
+  Status to_image(int cam, const FrameInfo& frame, const std::vector<float>& radiance, float scale,
+                  cv::Mat* image) const;
 
   const Scene* scene_ = nullptr;
   RenderOptions options_;
