@@ -9,12 +9,14 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <opencv2/core.hpp>
 
 #include "mrvs/config/yaml_document.h"
 #include "mrvs/core/file.h"
 #include "mrvs/io/dataset.h"
 #include "mrvs/io/gnss.h"
 #include "mrvs/io/trajectory_io.h"
+#include "mrvs/sim/exposure_log.h"
 #include "mrvs/sim/map_io.h"
 #include "mrvs/sim/photometry.h"
 #include "mrvs/sim/png_writer.h"
@@ -113,6 +115,21 @@ Status plan_states(World& world) {
   return absl::OkStatus();
 }
 
+/// render.dim_area: centred on the body position at a drawn point of the whole trajectory.
+Illumination plan_light(const RenderOptions& o, const World& world, std::uint64_t seed) {
+  Illumination light;
+  if (!o.dim_area || world.body_positions.empty()) return light;
+  const double u = CounterRng(seed, Stream::kIllumination).uniform(0);
+  const std::size_t i =
+      std::min(world.body_positions.size() - 1,
+               static_cast<std::size_t>(u * static_cast<double>(world.body_positions.size())));
+  light.enabled = true;
+  light.centre_xy = world.body_positions[i].head<2>().cast<float>();
+  light.level = static_cast<float>(o.dim_level);
+  light.radius_m = static_cast<float>(o.dim_radius_m);
+  return light;
+}
+
 /// Indoor: a room around the trajectory. Outdoor: streets along the route's straights.
 StatusOr<Scene> build_scene(const GeneratorRequest& r, const World& world, std::uint64_t seed) {
   if (!world.route) return make_scene(r.profile, r.options.scene.value, world.keep_clear, seed);
@@ -127,16 +144,16 @@ std::string map_comment(const GeneratorRequest& r) {
                      generator_version(), profile_name(r.profile), r.options.seed);
 }
 
-/// Body poses over frame k's exposure (render.motion_blur; centred on its true time, within
-/// the spline's support), as many as the faster-moving camera needs (exposure_samples); one,
-/// the frame's pose, without blur.
-StatusOr<std::vector<SE3d>> exposure_poses(const StereoRenderer& renderer, const World& world,
-                                           std::int64_t k) {
+/// Body poses over frame k's exposure of `exposure_ms` (render.motion_blur; centred on its
+/// true time, within the spline's support), as many as the faster-moving camera needs
+/// (exposure_samples); one, the frame's pose, without blur.
+StatusOr<std::vector<SE3d>> exposure_poses(const StereoRenderer& renderer, const World& world, std::int64_t k,
+                                           double exposure_ms) {
   const RenderOptions& o = renderer.options();
   const SE3d& T_w_b = world.frame_pose(static_cast<std::size_t>(k));
   if (!o.motion_blur) return std::vector<SE3d>{T_w_b};
   const TimestampNs t = world.grid.camera_true_ns[static_cast<std::size_t>(k)];
-  const DurationNs half = static_cast<DurationNs>(std::llround(0.5e6 * o.exposure_ms));
+  const DurationNs half = static_cast<DurationNs>(std::llround(0.5e6 * exposure_ms));
   const TimestampNs a = std::max(t - half, world.spline->support_begin_ns());
   const TimestampNs b = std::min(t + half, world.spline->support_end_ns());
   MRVS_ASSIGN_OR_RETURN(const Kinematics start, world.spline->evaluate(a));
@@ -158,33 +175,86 @@ StatusOr<std::vector<SE3d>> exposure_poses(const StereoRenderer& renderer, const
   return poses;
 }
 
-/// Both images of frame k, integrated over its exposure (exposure_poses).
+/// Both images of frame k, integrated over its exposure (exposure_poses); `record` gets the
+/// exposure, gains and sub-sample count.
 StatusOr<std::array<cv::Mat, 2>> render_frame(const StereoRenderer& renderer, const World& world,
-                                              std::int64_t k, double gain) {
-  MRVS_ASSIGN_OR_RETURN(const std::vector<SE3d> body, exposure_poses(renderer, world, k));
-  if (body.size() == 1) return renderer.render_stereo(body.front(), FrameInfo{k, gain});
+                                              std::int64_t k, FrameExposure* record) {
+  MRVS_ASSIGN_OR_RETURN(const std::vector<SE3d> body,
+                        exposure_poses(renderer, world, k, record->exposure_ms));
+  record->samples = static_cast<int>(body.size());
+  const FrameInfo info{k, record->gain, record->analog_gain};
+  if (body.size() == 1) return renderer.render_stereo(body.front(), info);
   std::array<cv::Mat, 2> images;
   for (int c = 0; c < 2; ++c) {
     std::vector<SE3d> cam;
     for (const SE3d& T_w_b : body) cam.push_back(renderer.camera_pose(c, T_w_b));
-    MRVS_RETURN_IF_ERROR(
-        renderer.render_exposure(c, cam, FrameInfo{k, gain}, &images[static_cast<std::size_t>(c)]));
+    MRVS_RETURN_IF_ERROR(renderer.render_exposure(c, cam, info, &images[static_cast<std::size_t>(c)]));
   }
   return images;
 }
 
+/// The exposure controller of a sequence: fixed at render.exposure_ms without
+/// render.auto_exposure; otherwise AutoExposure, started converged on frame 0 (a sharp
+/// metering render of cam0 at the reference exposure).
+class ExposureControl {
+ public:
+  static StatusOr<ExposureControl> create(const StereoRenderer& renderer, const World& world,
+                                          const std::vector<double>& walk) {
+    ExposureControl control;
+    control.walk_ = &walk;
+    control.reference_ms_ = renderer.options().exposure_ms;
+    if (!renderer.options().auto_exposure) return control;
+    const double interval_ms = 1e3 / world.rig.cameras[0].rate_hz;
+    MRVS_ASSIGN_OR_RETURN(AutoExposure ae, AutoExposure::create(renderer.options(), interval_ms));
+    MRVS_ASSIGN_OR_RETURN(
+        const cv::Mat metering,
+        renderer.render(0, renderer.camera_pose(0, world.frame_pose(0)), FrameInfo{0, walk[0]}));
+    ae.settle(cv::mean(metering)[0]);
+    control.ae_ = ae;
+    return control;
+  }
+  /// The exposure of frame k (before it is rendered).
+  FrameExposure next(std::int64_t k, TimestampNs stamp) const {
+    FrameExposure e;
+    e.t_ns = stamp;
+    e.exposure_ms = reference_ms_;
+    e.gain = (*walk_)[static_cast<std::size_t>(k)];
+    if (!ae_) return e;
+    const ExposureSetting s = ae_->setting();
+    e.exposure_ms = s.exposure_ms;
+    e.analog_gain = s.analog_gain;
+    e.gain *= ae_->relative_gain();
+    return e;
+  }
+  /// After frame k: its cam0 image's mean DN drives the auto-exposure.
+  void observe(FrameExposure* e, const cv::Mat& cam0) {
+    e->mean_dn = cv::mean(cam0)[0];
+    if (ae_) ae_->observe(e->mean_dn);
+  }
+
+ private:
+  const std::vector<double>* walk_ = nullptr;
+  double reference_ms_ = 5.0;
+  std::optional<AutoExposure> ae_;
+};
+
 /// Renders every frame; PNG encoding of frame k overlaps the rendering of frame k + 1.
 Status render_frames(const StereoRenderer& renderer, const World& world, const fs::path& mav0,
                      std::uint64_t seed, const ProgressCallback& progress,
-                     std::array<std::vector<io::ImageRecord>, 2>& records) {
+                     std::array<std::vector<io::ImageRecord>, 2>& records,
+                     std::vector<FrameExposure>& exposures) {
   const std::int64_t n = static_cast<std::int64_t>(world.grid.camera_true_ns.size());
-  const std::vector<double> gains = exposure_gains(seed, n, renderer.options());
+  const std::vector<double> walk = exposure_gains(seed, n, renderer.options());
+  MRVS_ASSIGN_OR_RETURN(ExposureControl control, ExposureControl::create(renderer, world, walk));
   std::future<Status> pending;
   for (std::int64_t k = 0; k < n; ++k) {
-    auto images = render_frame(renderer, world, k, gains[k]);
-    if (!images.ok()) return with_context(images.status(), fmt::format("rendering frame {}", k));
-    if (pending.valid()) MRVS_RETURN_IF_ERROR(pending.get());
     const TimestampNs stamp = world.grid.camera_stamp_ns[k];
+    FrameExposure exposure = control.next(k, stamp);
+    auto images = render_frame(renderer, world, k, &exposure);
+    if (!images.ok()) return with_context(images.status(), fmt::format("rendering frame {}", k));
+    control.observe(&exposure, (*images)[0]);
+    exposures.push_back(exposure);
+    if (pending.valid()) MRVS_RETURN_IF_ERROR(pending.get());
     std::array<fs::path, 2> paths;
     for (int c = 0; c < 2; ++c) {
       paths[c] = mav0 / fmt::format("cam{}/data/{}.png", c, stamp);
@@ -333,6 +403,7 @@ StatusOr<World> build_world(const GeneratorRequest& r, const ProgressCallback& p
   }
   MRVS_RETURN_IF_ERROR(plan_states(world));
   const std::uint64_t seed = static_cast<std::uint64_t>(r.options.seed);
+  world.light = plan_light(r.options.render, world, seed);
   if (progress) progress({"scene", 0, 1});
   MRVS_ASSIGN_OR_RETURN(world.scene, build_scene(r, world, seed));
   if (progress) progress({"map", 0, 1});
@@ -363,12 +434,16 @@ StatusOr<GeneratorReport> generate_dataset(const GeneratorRequest& r, const Prog
   const std::uint64_t seed = static_cast<std::uint64_t>(r.options.seed);
   MRVS_ASSIGN_OR_RETURN(StereoRenderer renderer,
                         StereoRenderer::create(*world.scene, world.calibration, r.options.render, seed));
+  MRVS_ASSIGN_OR_RETURN(renderer, renderer.with_illumination(world.light));
   std::array<std::vector<io::ImageRecord>, 2> records;
-  MRVS_RETURN_IF_ERROR(render_frames(renderer, world, mav0, seed, progress, records));
+  std::vector<FrameExposure> exposures;
+  MRVS_RETURN_IF_ERROR(render_frames(renderer, world, mav0, seed, progress, records, exposures));
   report.seconds_render = seconds_since(stage);
 
   MRVS_RETURN_IF_ERROR(write_sensor_files(world, r.options, mav0, records));
   MRVS_RETURN_IF_ERROR(write_truth_files(r, world, staging.path() / "sim0"));
+  MRVS_RETURN_IF_ERROR(write_exposure_csv(staging.path() / "sim0/exposure.csv", exposures));
+  MRVS_RETURN_IF_ERROR(write_illumination_yaml(staging.path() / "sim0/illumination.yaml", world.light));
   MRVS_RETURN_IF_ERROR(write_gnss_files(r, world, staging.path()));
   MRVS_RETURN_IF_ERROR(staging.commit());
 

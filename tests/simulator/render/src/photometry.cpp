@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
 namespace mrvs::sim {
 
 std::vector<double> exposure_gains(std::uint64_t seed, std::int64_t num_frames, double sigma, double limit) {
@@ -31,15 +33,65 @@ double camera_gain(int cam, const RenderOptions& options) {
   return cam == 1 ? 1.0 + options.stereo_gain_mismatch : 1.0;
 }
 
+StatusOr<AutoExposure> AutoExposure::create(const RenderOptions& options, double frame_interval_ms) {
+  if (!(frame_interval_ms > 0.0)) {
+    return absl::InvalidArgumentError(
+        fmt::format("auto-exposure: the frame interval {} ms is not > 0", frame_interval_ms));
+  }
+  AutoExposure ae;
+  ae.target_dn_ = options.ae_target_dn;
+  ae.deadband_ev_ = options.ae_deadband_ev;
+  ae.damping_ = options.ae_damping;
+  ae.step_ev_ = options.ae_step_ev;
+  ae.min_ms_ = options.ae_min_exposure_ms;
+  ae.max_exposure_ms_ = std::min(options.ae_max_exposure_ms, frame_interval_ms);
+  ae.max_gain_ = options.ae_max_analog_gain;
+  ae.reference_ms_ = options.exposure_ms;
+  if (ae.min_ms_ > ae.max_exposure_ms_) {
+    return absl::InvalidArgumentError(
+        fmt::format("render.ae_min_exposure_ms {} is longer than the longest exposure {} ms "
+                    "(render.ae_max_exposure_ms or "
+                    "the frame interval); lower it",
+                    ae.min_ms_, ae.max_exposure_ms_));
+  }
+  ae.brightness_ms_ = std::clamp(options.exposure_ms, ae.min_ms_, ae.max_exposure_ms_ * ae.max_gain_);
+  return ae;
+}
+
+ExposureSetting AutoExposure::setting() const {
+  const double exposure = std::min(brightness_ms_, max_exposure_ms_);
+  return {exposure, brightness_ms_ / exposure};
+}
+
+void AutoExposure::observe(double mean_dn) {
+  const double error_ev = std::log2(target_dn_ / std::clamp(mean_dn, 0.5, 255.0));
+  if (std::abs(error_ev) <= deadband_ev_) return;
+  double move_ev = damping_ * error_ev;
+  if (step_ev_ > 0.0) {
+    const double steps = std::max(1.0, std::round(std::abs(move_ev) / step_ev_));
+    move_ev = std::copysign(steps * step_ev_, error_ev);
+  }
+  brightness_ms_ = std::clamp(brightness_ms_ * std::exp2(move_ev), min_ms_, max_exposure_ms_ * max_gain_);
+}
+
+void AutoExposure::settle(double mean_dn_at_reference) {
+  for (int i = 0; i < 64; ++i) {
+    const double before = brightness_ms_;
+    observe(std::min(255.0, mean_dn_at_reference * relative_gain()));
+    if (brightness_ms_ == before) return;
+  }
+}
+
 PixelPhotometry::PixelPhotometry(const RenderOptions& options, const camera::CameraModel& camera, int cam,
-                                 std::int64_t frame, double frame_gain, std::uint64_t noise_seed)
+                                 std::int64_t frame, double frame_gain, std::uint64_t noise_seed,
+                                 double analog_gain)
     : gain_(frame_gain * camera_gain(cam, options)),
       vignetting_(options.vignetting),
       inv_r2_max_(0.0),
       cx_(camera.cx()),
       cy_(camera.cy()),
-      read_var_(options.read_noise_sigma * options.read_noise_sigma),
-      inv_shot_k_(options.shot_noise ? 1.0 / options.shot_noise_k : 0.0),
+      read_var_(analog_gain * analog_gain * options.read_noise_sigma * options.read_noise_sigma),
+      inv_shot_k_(options.shot_noise ? analog_gain / options.shot_noise_k : 0.0),
       has_noise_(options.read_noise_sigma > 0.0 || options.shot_noise),
       rng_(noise_seed, Stream::kImageNoise),
       cam_(static_cast<std::uint64_t>(cam)),

@@ -58,6 +58,18 @@ StatusOr<StereoRenderer> StereoRenderer::with_options(const RenderOptions& optio
   return r;
 }
 
+StatusOr<StereoRenderer> StereoRenderer::with_illumination(const Illumination& light) const {
+  if (!(light.level > 0.0f && light.level <= 1.0f) || !(light.radius_m > 0.0f) ||
+      !light.centre_xy.allFinite()) {
+    return absl::InvalidArgumentError(
+        fmt::format("StereoRenderer: illumination level {} must be in (0, 1], radius {} m > 0, centre finite",
+                    light.level, light.radius_m));
+  }
+  StereoRenderer r = *this;
+  r.light_ = light;
+  return r;
+}
+
 Status StereoRenderer::check_request(int cam, const SE3d& T_w_c) const {
   if (cam != 0 && cam != 1) {
     return absl::InvalidArgumentError(fmt::format("StereoRenderer: camera index {} is not 0 or 1", cam));
@@ -94,7 +106,8 @@ float StereoRenderer::shade_center(const View& view, int u, int v, int* face) co
     lod = detail::mip_level(hit->distance, view.table->pixel_angle(u, v), info.normal.dot(d_w), view.min_cos,
                             info.inv_texel);
   }
-  return scene_->albedo(hit->face, hit->u, hit->v, lod);
+  const float albedo = scene_->albedo(hit->face, hit->u, hit->v, lod);
+  return light_.enabled ? albedo * light_.light(view.origin + hit->distance * d_w) : albedo;
 }
 
 float StereoRenderer::shade_supersampled(const View& view, int u, int v) const {
@@ -102,7 +115,12 @@ float StereoRenderer::shade_supersampled(const View& view, int u, int v) const {
   for (int k = 0; k < RayTable::kSubsamples; ++k) {
     const Eigen::Vector3f d_w = view.R_w_c * view.table->subsample(u, v, k);
     const std::optional<Hit> hit = scene_->intersect(view.origin, d_w, view.max_distance);
-    sum += hit ? scene_->albedo(hit->face, hit->u, hit->v, 0.0f) : scene_->background(d_w);
+    if (!hit) {
+      sum += scene_->background(d_w);
+      continue;
+    }
+    const float albedo = scene_->albedo(hit->face, hit->u, hit->v, 0.0f);
+    sum += light_.enabled ? albedo * light_.light(view.origin + hit->distance * d_w) : albedo;
   }
   return 0.25f * sum;
 }
@@ -177,7 +195,12 @@ Status StereoRenderer::to_image(int cam, const FrameInfo& frame, const std::vect
         fmt::format("StereoRenderer::render: frame gain {} is not >= 0", frame.gain));
   }
   const int w = camera(cam).width(), h = camera(cam).height();
-  const PixelPhotometry photometry(options_, camera(cam), cam, frame.index, frame.gain, noise_seed_);
+  if (!std::isfinite(frame.analog_gain) || frame.analog_gain < 1.0) {
+    return absl::InvalidArgumentError(
+        fmt::format("StereoRenderer::render: analog gain {} is not >= 1", frame.analog_gain));
+  }
+  const PixelPhotometry photometry(options_, camera(cam), cam, frame.index, frame.gain, noise_seed_,
+                                   frame.analog_gain);
   image->create(h, w, CV_8UC1);
 #pragma omp parallel for schedule(dynamic, 8)
   for (int v = 0; v < h; ++v) {

@@ -17,6 +17,7 @@
 #include "generated_sequence.h"
 #include "mrvs/io/dataset.h"
 #include "mrvs/io/trajectory_io.h"
+#include "mrvs/sim/exposure_log.h"
 #include "mrvs/sim/map_io.h"
 #include "mrvs/sim/test/strapdown.h"
 #include "mrvs/test/temp_dir.h"
@@ -292,7 +293,7 @@ TEST_F(GeneratedIndoor, MotionBlurChangesOnlyTheImagesAndIsDeterministic) {
   for (const auto& [name, bytes] : sharp) {
     ASSERT_TRUE(blur.count(name)) << name;
     if (name.rfind(".png") != name.size() - 4) {
-      if (name != "sim0/config.yaml" && name != "sim0/request.yaml") {
+      if (name != "sim0/config.yaml" && name != "sim0/request.yaml" && name != "sim0/exposure.csv") {
         EXPECT_TRUE(bytes == blur.at(name)) << name;
       }
       continue;
@@ -311,6 +312,79 @@ TEST_F(GeneratedIndoor, MotionBlurChangesOnlyTheImagesAndIsDeterministic) {
   EXPECT_EQ(images, 2 * static_cast<int>(world_->grid.camera_true_ns.size()));
   EXPECT_GT(blurred, images / 2) << "V1_01 moves at 20 s: most frames blur over 10 ms";
   EXPECT_LT(blur_gradient, sharp_gradient);
+}
+
+/// sim0/exposure.csv of a sequence generated from `r`; empty after a failure (reported).
+std::vector<FrameExposure> exposures_of(const GeneratorRequest& r) {
+  const auto report = generate_dataset(r);
+  EXPECT_TRUE(report.ok()) << report.status();
+  if (!report.ok()) return {};
+  auto frames = read_exposure_csv(r.out / "sim0/exposure.csv");
+  EXPECT_TRUE(frames.ok()) << frames.status();
+  return frames.ok() ? *frames : std::vector<FrameExposure>{};
+}
+
+double median_exposure(std::vector<FrameExposure> frames) {
+  std::sort(frames.begin(), frames.end(),
+            [](const FrameExposure& a, const FrameExposure& b) { return a.exposure_ms < b.exposure_ms; });
+  return frames[frames.size() / 2].exposure_ms;
+}
+
+// Auto-exposure in a generated sequence: the image mean stays near the target; a room 4x
+// darker takes 4x the exposure (and blurs more); one too dark for the longest exposure
+// saturates at it with the full analog gain. Every frame within its bounds.
+TEST_F(GeneratedIndoor, AutoExposureLengthensTheExposureInTheDarkWithinItsBounds) {
+  GeneratorRequest r = test::indoor_request(dir_->path() / "ae");
+  r.options.render.auto_exposure = true;
+  const std::vector<FrameExposure> lit = exposures_of(r);
+  r.out = dir_->path() / "ae_dim";
+  r.options.render.dim_area = true;  // the whole room at 1/4 of the light
+  r.options.render.dim_level = 0.25;
+  r.options.render.dim_radius_m = 1000.0;
+  r.options.render.motion_blur = true;
+  const std::vector<FrameExposure> dim = exposures_of(r);
+  r.out = dir_->path() / "ae_dark";
+  r.options.render.dim_level = 0.01;
+  r.options.render.motion_blur = false;
+  const std::vector<FrameExposure> dark = exposures_of(r);
+  const std::size_t frames = world_->grid.camera_true_ns.size();
+  ASSERT_EQ(lit.size(), frames);
+  ASSERT_EQ(dim.size(), frames);
+  ASSERT_EQ(dark.size(), frames);
+  const RenderOptions& o = r.options.render;
+  for (const auto* run : {&lit, &dim, &dark}) {
+    for (std::size_t k = 0; k < frames; ++k) {
+      const FrameExposure& f = (*run)[k];
+      EXPECT_EQ(f.t_ns, world_->grid.camera_stamp_ns[k]);
+      EXPECT_GE(f.exposure_ms, o.ae_min_exposure_ms);
+      EXPECT_LE(f.exposure_ms, o.ae_max_exposure_ms);
+      EXPECT_GE(f.analog_gain, 1.0);
+      EXPECT_LE(f.analog_gain, o.ae_max_analog_gain + 1e-9);
+      if (f.analog_gain > 1.0) {
+        EXPECT_EQ(f.exposure_ms, o.ae_max_exposure_ms);
+      }
+      // The DN scale is exposure x gain over the reference (the easy preset has no walk).
+      EXPECT_NEAR(f.gain, f.exposure_ms * f.analog_gain / o.exposure_ms, 1e-9);
+    }
+  }
+  for (std::size_t k = 0; k < frames; ++k) {
+    EXPECT_LT(std::abs(std::log2(lit[k].mean_dn / o.ae_target_dn)), 0.35) << k;
+    EXPECT_LT(std::abs(std::log2(dim[k].mean_dn / o.ae_target_dn)), 0.35) << k;
+    EXPECT_EQ(lit[k].samples, 1) << "no blur asked";
+    EXPECT_EQ(dark[k].exposure_ms, o.ae_max_exposure_ms) << k;
+    EXPECT_NEAR(dark[k].analog_gain, o.ae_max_analog_gain, 1e-9) << k;
+    EXPECT_LT(dark[k].mean_dn, 0.5 * o.ae_target_dn) << k;
+  }
+  const double ratio = median_exposure(dim) / median_exposure(lit);
+  EXPECT_GT(ratio, 4.0 * std::exp2(-0.35));
+  EXPECT_LT(ratio, 4.0 * std::exp2(0.35));
+  int blurred = 0;
+  for (const FrameExposure& f : dim) blurred += f.samples > 1;
+  EXPECT_GT(blurred, static_cast<int>(frames) / 2) << "V1_01 moves at 20 s: a ~20 ms exposure blurs";
+  const auto light = read_illumination_yaml(dir_->path() / "ae_dim/sim0/illumination.yaml");
+  ASSERT_TRUE(light.ok()) << light.status();
+  EXPECT_TRUE(light->enabled);
+  EXPECT_FLOAT_EQ(light->level, 0.25f);
 }
 
 // Bad input: a clear error, nothing at --out, no staging folder left in its parent.

@@ -28,6 +28,7 @@ enum class Stream : std::uint64_t {
   kMisalignment = 10,
   kRoute = 11,
   kGnss = 12,
+  kIllumination = 13,
 };
 
 using mrvs::mix64;

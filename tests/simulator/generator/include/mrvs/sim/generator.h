@@ -17,6 +17,7 @@
 #include "mrvs/sim/scene.h"
 #include "mrvs/sim/simulator_options.h"
 #include "mrvs/sim/spline_trajectory.h"
+#include "mrvs/sim/stereo_renderer.h"
 #include "mrvs/sim/time_grid.h"
 
 namespace mrvs::sim {
@@ -69,6 +70,7 @@ struct World {
   std::optional<Scene> scene;
   PriorMap map;
   std::vector<GnssSimFix> gnss;  ///< GNSS fixes with their truth; empty when gnss.enabled is off
+  Illumination light;            ///< render.dim_area: centred on a drawn point of the trajectory
 
   /// T_w_b at camera frame k (its true, IMU-clock time).
   const SE3d& frame_pose(std::size_t k) const { return states[grid.camera_imu_index[k]].T_w_b; }

@@ -1,6 +1,6 @@
 #pragma once
 // Stereo image renderer (simulator.md section 4): ray-casts a Scene through per-camera ray
-// tables, shades with the scene albedo (radiance = albedo, no lighting), anti-aliases
+// tables, shades with the scene albedo times the light (Illumination), anti-aliases
 // (adaptive / full / none) and maps radiance to 8-bit DN with gain, vignetting and noise
 // (photometry.h). Also gives the truth needed by tests: per-pixel depth, face id and face
 // (u, v), and the true image motion of a pixel between two poses or cameras.
@@ -8,6 +8,7 @@
 // Frames: w = world, b = body (IMU), c = camera; T_w_c = T_w_b * T_b_c.
 // Output is identical for any OpenMP thread count (disjoint writes, counter-based noise).
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -27,8 +28,25 @@ namespace mrvs::sim {
 
 /// Per-frame inputs of one render.
 struct FrameInfo {
-  std::int64_t index = 0;  ///< frame number (keys the image noise)
-  double gain = 1.0;       ///< frame gain g_k (exposure_gains()), shared by both cameras
+  std::int64_t index = 0;    ///< frame number (keys the image noise)
+  double gain = 1.0;         ///< frame gain g_k (exposure_gains() times AutoExposure), both cameras
+  double analog_gain = 1.0;  ///< A_k, amplifies the noise too (photometry.h)
+};
+
+/// The scene's light (render.dim_area): 1 everywhere but in a dim area around a vertical
+/// axis through centre_xy, light(p) = 1 - (1 - level) exp(-d^2 / (2 r^2)) with d the
+/// horizontal distance of p from the axis. Radiance = albedo * light; the sky is unlit.
+struct Illumination {
+  bool enabled = false;
+  Eigen::Vector2f centre_xy = Eigen::Vector2f::Zero();  ///< world, m
+  float level = 1.0f;                                   ///< light on the axis
+  float radius_m = 1.0f;                                ///< r, m
+
+  float light(const Eigen::Vector3f& p_w) const {
+    if (!enabled) return 1.0f;
+    const float d2 = (p_w.head<2>() - centre_xy).squaredNorm();
+    return 1.0f - (1.0f - level) * std::exp(-d2 / (2.0f * radius_m * radius_m));
+  }
 };
 
 /// Per-pixel truth of one camera pose (pixel centre rays, the same casts as the image).
@@ -67,6 +85,9 @@ class StereoRenderer {
 
   /// A renderer sharing this one's scene, cameras and ray tables, with other options.
   StatusOr<StereoRenderer> with_options(const RenderOptions& options) const;
+  /// The same renderer under `light` (InvalidArgument for a level outside (0, 1] or r <= 0).
+  StatusOr<StereoRenderer> with_illumination(const Illumination& light) const;
+  const Illumination& illumination() const { return light_; }
 
   const RenderOptions& options() const { return options_; }
   const camera::CameraModel& camera(int cam) const { return *cameras_[static_cast<std::size_t>(cam)]; }
@@ -138,6 +159,7 @@ class StereoRenderer {
   std::array<SE3d, 2> T_b_c_;
   std::array<std::shared_ptr<const RayTable>, 2> tables_;
   std::shared_ptr<const std::vector<FaceInfo>> faces_;
+  Illumination light_;
 };
 
 }  // namespace mrvs::sim
