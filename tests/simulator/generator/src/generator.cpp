@@ -72,7 +72,7 @@ Status plan_motion(const GeneratorRequest& r, World& world) {
   TimeGridOptions grid;
   grid.imu_rate_hz = static_cast<int>(std::lround(world.rig.imu.rate_hz));
   grid.camera_rate_hz = static_cast<int>(std::lround(world.rig.cameras[0].rate_hz));
-  grid.camera_time_offset_ns = std::llround(r.options.time_offset_ms * 1e6);
+  grid.camera_time_offset_ns = std::llround(world.time_offset_ms * 1e6);
   MRVS_ASSIGN_OR_RETURN(world.grid,
                         make_time_grid(world.spline->t_begin_ns(), world.spline->t_end_ns(), grid));
   if (world.grid.camera_true_ns.size() < 2) {
@@ -354,8 +354,9 @@ Status write_gnss_files(const GeneratorRequest& r, const World& world, const fs:
 }
 
 Status make_folders(const fs::path& root) {
-  for (const char* sub : {"mav0/cam0/data", "mav0/cam1/data", "mav0/imu0", "mav0/state_groundtruth_estimate0",
-                          "mav0/pointcloud0", "sim0"}) {
+  for (const char* sub :
+       {"mav0/cam0/data", "mav0/cam1/data", "mav0/imu0", "mav0/state_groundtruth_estimate0",
+        "mav0/pointcloud0", "sim0", "sim0/true_calibration/cam0", "sim0/true_calibration/cam1"}) {
     std::error_code ec;
     fs::create_directories(root / sub, ec);
     if (ec)
@@ -396,13 +397,20 @@ std::string generator_version() { return fmt::format("mrvs dataset_simulator {}"
 StatusOr<World> build_world(const GeneratorRequest& r, const ProgressCallback& progress) {
   World world;
   world.rig = r.profile == SceneProfile::kIndoor ? euroc_rig() : kaist_like_rig();
-  MRVS_ASSIGN_OR_RETURN(world.calibration, world.rig.calibration());
+  const std::uint64_t seed = static_cast<std::uint64_t>(r.options.seed);
+  TrueCalibration truth =
+      draw_true_calibration(world.rig, r.options.time_offset_ms, r.options.calib_error, seed);
+  world.true_rig = std::move(truth.rig);
+  world.time_offset_ms = truth.time_offset_ms;
+  auto calibration = world.true_rig.calibration();
+  if (!calibration.ok())
+    return with_context(calibration.status(), "the drawn true calibration (calib_error.*)");
+  world.calibration = std::move(*calibration);
   MRVS_RETURN_IF_ERROR(plan_motion(r, world));
   if (r.options.gnss.enabled) {  // a rate off the IMU grid fails before the scene and map are built
     MRVS_RETURN_IF_ERROR(gnss_period_ns(r.options.gnss.rate_hz, world.grid.imu_period_ns).status());
   }
   MRVS_RETURN_IF_ERROR(plan_states(world));
-  const std::uint64_t seed = static_cast<std::uint64_t>(r.options.seed);
   world.light = plan_light(r.options.render, world, seed);
   if (progress) progress({"scene", 0, 1});
   MRVS_ASSIGN_OR_RETURN(world.scene, build_scene(r, world, seed));
@@ -444,6 +452,8 @@ StatusOr<GeneratorReport> generate_dataset(const GeneratorRequest& r, const Prog
   MRVS_RETURN_IF_ERROR(write_truth_files(r, world, staging.path() / "sim0"));
   MRVS_RETURN_IF_ERROR(write_exposure_csv(staging.path() / "sim0/exposure.csv", exposures));
   MRVS_RETURN_IF_ERROR(write_illumination_yaml(staging.path() / "sim0/illumination.yaml", world.light));
+  MRVS_RETURN_IF_ERROR(write_true_calibration(staging.path() / "sim0/true_calibration",
+                                              TrueCalibration{world.true_rig, world.time_offset_ms}));
   MRVS_RETURN_IF_ERROR(write_gnss_files(r, world, staging.path()));
   MRVS_RETURN_IF_ERROR(staging.commit());
 

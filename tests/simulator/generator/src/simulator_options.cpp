@@ -52,6 +52,7 @@ Status apply_preset(const std::string& preset, SimulatorOptions& o) {
     o.map.misalignment_deg = 0.0;
     o.map.misalignment_m = 0.0;
     o.time_offset_ms = 0.0;
+    o.calib_error.enabled = false;
     o.gnss.outlier_probability = 0.0;
     return absl::OkStatus();
   }

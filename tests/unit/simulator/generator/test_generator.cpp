@@ -15,8 +15,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "generated_sequence.h"
+#include "mrvs/config/calibration.h"
 #include "mrvs/io/dataset.h"
 #include "mrvs/io/trajectory_io.h"
+#include "mrvs/sim/calibration_error.h"
 #include "mrvs/sim/exposure_log.h"
 #include "mrvs/sim/map_io.h"
 #include "mrvs/sim/test/strapdown.h"
@@ -385,6 +387,55 @@ TEST_F(GeneratedIndoor, AutoExposureLengthensTheExposureInTheDarkWithinItsBounds
   ASSERT_TRUE(light.ok()) << light.status();
   EXPECT_TRUE(light->enabled);
   EXPECT_FLOAT_EQ(light->level, 0.25f);
+}
+
+// Calibration error: mav0 keeps the written (nominal) calibration, the images are rendered by
+// the drawn true rig written to sim0/true_calibration/, and the stamps carry the true offset.
+TEST_F(GeneratedIndoor, CalibrationErrorRendersWithTheTrueRigAndWritesTheNominalOne) {
+  GeneratorRequest r = test::indoor_request(dir_->path() / "calib");
+  r.options.calib_error.enabled = true;
+  ASSERT_TRUE(generate_dataset(r).ok());
+  const std::filesystem::path seq = dir_->path() / "seq", calib = dir_->path() / "calib";
+  const auto nominal_tree = test::read_tree(seq), calib_tree = test::read_tree(calib);
+  for (const char* file : {"mav0/cam0/sensor.yaml", "mav0/cam1/sensor.yaml", "mav0/imu0/sensor.yaml"}) {
+    ASSERT_TRUE(nominal_tree.count(file) && calib_tree.count(file)) << file;
+    EXPECT_EQ(nominal_tree.at(file), calib_tree.at(file)) << file;
+  }
+  auto world = build_world(r);
+  ASSERT_TRUE(world.ok()) << world.status();
+  const TrueCalibration drawn = draw_true_calibration(world->rig, 0.0, r.options.calib_error, 1);
+  EXPECT_EQ(world->time_offset_ms, drawn.time_offset_ms);
+  const StatusOr<double> td = read_true_time_offset_ms(calib / "sim0/true_calibration");
+  ASSERT_TRUE(td.ok()) << td.status();
+  EXPECT_EQ(*td, drawn.time_offset_ms);
+  EXPECT_NE(*td, 0.0);
+  config::StereoRigCalibration truth = world->calibration;
+  for (int c = 0; c < 2; ++c) {
+    auto cam =
+        config::load_euroc_camera_yaml(calib / fmt::format("sim0/true_calibration/cam{}/sensor.yaml", c));
+    ASSERT_TRUE(cam.ok()) << cam.status();
+    truth.cameras[static_cast<std::size_t>(c)] = *cam;
+  }
+  auto true_renderer = StereoRenderer::create(*world->scene, truth, r.options.render, 1);
+  auto written_renderer = StereoRenderer::create(*world->scene, world_->calibration, r.options.render, 1);
+  ASSERT_TRUE(true_renderer.ok() && written_renderer.ok());
+  const std::size_t frames = world->grid.camera_true_ns.size();
+  for (std::size_t k : {std::size_t{0}, frames / 2, frames - 1}) {
+    // Written stamp = true time - t_d.
+    EXPECT_EQ(world->grid.camera_stamp_ns[k],
+              world->grid.camera_true_ns[k] - std::llround(drawn.time_offset_ms * 1e6));
+    const std::string png = fmt::format("mav0/cam1/data/{}.png", world->grid.camera_stamp_ns[k]);
+    const cv::Mat image = cv::imread((calib / png).string(), cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(image.empty()) << png;
+    const FrameInfo info{static_cast<std::int64_t>(k), 1.0};
+    const SE3d& T_w_b = world->frame_pose(k);
+    auto expected = true_renderer->render(1, true_renderer->camera_pose(1, T_w_b), info);
+    auto nominal = written_renderer->render(1, written_renderer->camera_pose(1, T_w_b), info);
+    ASSERT_TRUE(expected.ok() && nominal.ok());
+    EXPECT_EQ(cv::norm(image, *expected, cv::NORM_INF), 0.0) << png;
+    EXPECT_GT(cv::norm(image, *nominal, cv::NORM_L1) / static_cast<double>(image.total()), 2.0)
+        << png << ": the true rig moves the image";
+  }
 }
 
 // Bad input: a clear error, nothing at --out, no staging folder left in its parent.

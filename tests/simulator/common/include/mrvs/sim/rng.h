@@ -29,6 +29,7 @@ enum class Stream : std::uint64_t {
   kRoute = 11,
   kGnss = 12,
   kIllumination = 13,
+  kCalibration = 14,
 };
 
 using mrvs::mix64;

@@ -57,8 +57,10 @@ struct GeneratorReport {
 /// Everything a sequence is made of, in memory: what generate_dataset writes, and what
 /// tests use to check the files against (the same scene, map and poses).
 struct World {
-  Rig rig;
-  config::StereoRigCalibration calibration;  ///< render truth = what sensor.yaml says
+  Rig rig;                                   ///< the rig written to mav0/*/sensor.yaml
+  Rig true_rig;                              ///< the rig that renders (calib_error; else = rig)
+  double time_offset_ms = 0.0;               ///< true camera-IMU offset t_d (calib_error adds a draw)
+  config::StereoRigCalibration calibration;  ///< render truth: true_rig
   std::optional<SplineTrajectory> spline;    ///< the ground-truth motion
   std::string source;                        ///< where the motion came from
   std::optional<CarRoute> route;             ///< outdoor: the synthesised car route

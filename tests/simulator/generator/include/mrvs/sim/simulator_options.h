@@ -9,6 +9,7 @@
 
 #include "mrvs/config/options.h"
 #include "mrvs/core/status.h"
+#include "mrvs/sim/calibration_error.h"
 #include "mrvs/sim/car_route.h"
 #include "mrvs/sim/gnss_sim.h"
 #include "mrvs/sim/imu_sim.h"
@@ -39,16 +40,17 @@ struct SceneKnobs : config::OptionsEquality<SceneKnobs> {
 };
 
 struct SimulatorOptions : config::OptionsEquality<SimulatorOptions> {
-  std::int64_t seed = 1;         ///< one seed for every random stream
-  double time_offset_ms = 0.0;   ///< camera-IMU offset t_d: t_imu = t_cam + t_d, ms
-  bool write_clean_map = false;  ///< also write sim0/pointcloud_clean.ply (no noise, no misalignment)
-  TrajectoryOptions trajectory;  ///< window, static prefix, knot spacing
-  CarRouteOptions route;         ///< outdoor only: the route the car drives
-  ImuSimOptions imu;             ///< IMU noise and biases
-  SceneKnobs scene;              ///< clutter and texture knobs
-  RenderOptions render;          ///< anti-aliasing and photometric knobs
-  MapOptions map;                ///< prior-map density, noise, holes, misalignment
-  GnssSimOptions gnss;           ///< GNSS fixes (outdoor default: on)
+  std::int64_t seed = 1;                ///< one seed for every random stream
+  double time_offset_ms = 0.0;          ///< camera-IMU offset t_d: t_imu = t_cam + t_d, ms
+  bool write_clean_map = false;         ///< also write sim0/pointcloud_clean.ply (no noise, no misalignment)
+  TrajectoryOptions trajectory;         ///< window, static prefix, knot spacing
+  CarRouteOptions route;                ///< outdoor only: the route the car drives
+  ImuSimOptions imu;                    ///< IMU noise and biases
+  SceneKnobs scene;                     ///< clutter and texture knobs
+  RenderOptions render;                 ///< anti-aliasing and photometric knobs
+  MapOptions map;                       ///< prior-map density, noise, holes, misalignment
+  GnssSimOptions gnss;                  ///< GNSS fixes (outdoor default: on)
+  CalibrationErrorOptions calib_error;  ///< the rendering rig differs from the written one
 
   template <class V>
   void visit(V& v) {
@@ -64,6 +66,7 @@ struct SimulatorOptions : config::OptionsEquality<SimulatorOptions> {
     v.section("render", render, "image formation");
     v.section("map", map, "survey LiDAR prior map");
     v.section("gnss", gnss, "GNSS position fixes of a roof antenna (mav0/gnss0)");
+    v.section("calib_error", calib_error, "true rig vs the calibration written in sensor.yaml");
   }
 };
 
