@@ -18,6 +18,7 @@
 #include "mrvs/io/trajectory_io.h"
 #include "mrvs/sim/exposure_log.h"
 #include "mrvs/sim/map_io.h"
+#include "mrvs/sim/people_plan.h"
 #include "mrvs/sim/photometry.h"
 #include "mrvs/sim/png_writer.h"
 #include "mrvs/sim/prior_map.h"
@@ -144,15 +145,21 @@ std::string map_comment(const GeneratorRequest& r) {
                      generator_version(), profile_name(r.profile), r.options.seed);
 }
 
+/// The body poses of an exposure and their times.
+struct ExposureSamples {
+  std::vector<SE3d> body;
+  std::vector<TimestampNs> t_ns;
+};
+
 /// Body poses over frame k's exposure of `exposure_ms` (render.motion_blur; centred on its
 /// true time, within the spline's support), as many as the faster-moving camera needs
 /// (exposure_samples); one, the frame's pose, without blur.
-StatusOr<std::vector<SE3d>> exposure_poses(const StereoRenderer& renderer, const World& world, std::int64_t k,
-                                           double exposure_ms) {
+StatusOr<ExposureSamples> exposure_poses(const StereoRenderer& renderer, const World& world, std::int64_t k,
+                                         double exposure_ms) {
   const RenderOptions& o = renderer.options();
-  const SE3d& T_w_b = world.frame_pose(static_cast<std::size_t>(k));
-  if (!o.motion_blur) return std::vector<SE3d>{T_w_b};
   const TimestampNs t = world.grid.camera_true_ns[static_cast<std::size_t>(k)];
+  const ExposureSamples sharp{{world.frame_pose(static_cast<std::size_t>(k))}, {t}};
+  if (!o.motion_blur) return sharp;
   const DurationNs half = static_cast<DurationNs>(std::llround(0.5e6 * exposure_ms));
   const TimestampNs a = std::max(t - half, world.spline->support_begin_ns());
   const TimestampNs b = std::min(t + half, world.spline->support_end_ns());
@@ -164,33 +171,48 @@ StatusOr<std::vector<SE3d>> exposure_poses(const StereoRenderer& renderer, const
         n, renderer.exposure_samples(c, renderer.camera_pose(c, start.T_w_b),
                                      renderer.camera_pose(c, end.T_w_b), o.blur_step_px, o.blur_max_samples));
   }
-  if (n == 1) return std::vector<SE3d>{T_w_b};
-  std::vector<SE3d> poses;
+  if (n == 1) return sharp;
+  ExposureSamples samples;
   for (int i = 0; i < n; ++i) {  // the middles of n equal parts of the exposure
     const TimestampNs ti =
         a + static_cast<DurationNs>(std::llround((i + 0.5) * static_cast<double>(b - a) / n));
     MRVS_ASSIGN_OR_RETURN(const Kinematics kin, world.spline->evaluate(ti));
-    poses.push_back(kin.T_w_b);
+    samples.body.push_back(kin.T_w_b);
+    samples.t_ns.push_back(ti);
   }
-  return poses;
+  return samples;
 }
 
 /// Both images of frame k, integrated over its exposure (exposure_poses); `record` gets the
 /// exposure, gains and sub-sample count.
 StatusOr<std::array<cv::Mat, 2>> render_frame(const StereoRenderer& renderer, const World& world,
                                               std::int64_t k, FrameExposure* record) {
-  MRVS_ASSIGN_OR_RETURN(const std::vector<SE3d> body,
+  MRVS_ASSIGN_OR_RETURN(const ExposureSamples samples,
                         exposure_poses(renderer, world, k, record->exposure_ms));
-  record->samples = static_cast<int>(body.size());
-  const FrameInfo info{k, record->gain, record->analog_gain};
-  if (body.size() == 1) return renderer.render_stereo(body.front(), info);
+  record->samples = static_cast<int>(samples.body.size());
+  const FrameInfo info{k, record->gain, record->analog_gain,
+                       world.grid.camera_true_ns[static_cast<std::size_t>(k)]};
+  if (samples.body.size() == 1) return renderer.render_stereo(samples.body.front(), info);
   std::array<cv::Mat, 2> images;
   for (int c = 0; c < 2; ++c) {
     std::vector<SE3d> cam;
-    for (const SE3d& T_w_b : body) cam.push_back(renderer.camera_pose(c, T_w_b));
-    MRVS_RETURN_IF_ERROR(renderer.render_exposure(c, cam, info, &images[static_cast<std::size_t>(c)]));
+    for (const SE3d& T_w_b : samples.body) cam.push_back(renderer.camera_pose(c, T_w_b));
+    MRVS_RETURN_IF_ERROR(
+        renderer.render_exposure(c, cam, info, &images[static_cast<std::size_t>(c)], samples.t_ns));
   }
   return images;
+}
+
+/// Pixels of frame k's sharp views whose nearest hit is a person.
+PeoplePixels count_people(const StereoRenderer& renderer, const World& world, std::int64_t k) {
+  const std::size_t i = static_cast<std::size_t>(k);
+  PeoplePixels row{world.grid.camera_stamp_ns[i], {0, 0}};
+  if (world.people.empty()) return row;
+  for (int c = 0; c < 2; ++c) {
+    row.pixels[static_cast<std::size_t>(c)] =
+        renderer.people_pixels(c, renderer.camera_pose(c, world.frame_pose(i)), world.grid.camera_true_ns[i]);
+  }
+  return row;
 }
 
 /// The exposure controller of a sequence: fixed at render.exposure_ms without
@@ -239,10 +261,15 @@ class ExposureControl {
 };
 
 /// Renders every frame; PNG encoding of frame k overlaps the rendering of frame k + 1.
+/// What rendering leaves besides the PNGs: the image lists and the per-frame truth.
+struct RenderedFrames {
+  std::array<std::vector<io::ImageRecord>, 2> records;
+  std::vector<FrameExposure> exposures;
+  std::vector<PeoplePixels> people;
+};
+
 Status render_frames(const StereoRenderer& renderer, const World& world, const fs::path& mav0,
-                     std::uint64_t seed, const ProgressCallback& progress,
-                     std::array<std::vector<io::ImageRecord>, 2>& records,
-                     std::vector<FrameExposure>& exposures) {
+                     std::uint64_t seed, const ProgressCallback& progress, RenderedFrames& out) {
   const std::int64_t n = static_cast<std::int64_t>(world.grid.camera_true_ns.size());
   const std::vector<double> walk = exposure_gains(seed, n, renderer.options());
   MRVS_ASSIGN_OR_RETURN(ExposureControl control, ExposureControl::create(renderer, world, walk));
@@ -253,12 +280,13 @@ Status render_frames(const StereoRenderer& renderer, const World& world, const f
     auto images = render_frame(renderer, world, k, &exposure);
     if (!images.ok()) return with_context(images.status(), fmt::format("rendering frame {}", k));
     control.observe(&exposure, (*images)[0]);
-    exposures.push_back(exposure);
+    out.exposures.push_back(exposure);
+    out.people.push_back(count_people(renderer, world, k));
     if (pending.valid()) MRVS_RETURN_IF_ERROR(pending.get());
     std::array<fs::path, 2> paths;
     for (int c = 0; c < 2; ++c) {
       paths[c] = mav0 / fmt::format("cam{}/data/{}.png", c, stamp);
-      records[c].push_back({stamp, paths[c]});
+      out.records[c].push_back({stamp, paths[c]});
     }
     pending = std::async(std::launch::async, [imgs = std::move(*images), paths]() -> Status {
       for (int c = 0; c < 2; ++c) MRVS_RETURN_IF_ERROR(write_png(paths[c], imgs[c]));
@@ -416,6 +444,7 @@ StatusOr<World> build_world(const GeneratorRequest& r, const ProgressCallback& p
   MRVS_ASSIGN_OR_RETURN(world.scene, build_scene(r, world, seed));
   if (progress) progress({"map", 0, 1});
   MRVS_ASSIGN_OR_RETURN(world.map, sample_prior_map(*world.scene, world.body_positions, r.options.map, seed));
+  MRVS_ASSIGN_OR_RETURN(world.people, plan_people(r.options.people, world, seed));
   if (r.options.gnss.enabled) {
     MRVS_ASSIGN_OR_RETURN(world.gnss,
                           simulate_gnss(world.states, world.map.T_map_world, r.options.gnss, seed));
@@ -443,15 +472,17 @@ StatusOr<GeneratorReport> generate_dataset(const GeneratorRequest& r, const Prog
   MRVS_ASSIGN_OR_RETURN(StereoRenderer renderer,
                         StereoRenderer::create(*world.scene, world.calibration, r.options.render, seed));
   MRVS_ASSIGN_OR_RETURN(renderer, renderer.with_illumination(world.light));
-  std::array<std::vector<io::ImageRecord>, 2> records;
-  std::vector<FrameExposure> exposures;
-  MRVS_RETURN_IF_ERROR(render_frames(renderer, world, mav0, seed, progress, records, exposures));
+  renderer = renderer.with_people(world.people);
+  RenderedFrames frames;
+  MRVS_RETURN_IF_ERROR(render_frames(renderer, world, mav0, seed, progress, frames));
   report.seconds_render = seconds_since(stage);
 
-  MRVS_RETURN_IF_ERROR(write_sensor_files(world, r.options, mav0, records));
+  MRVS_RETURN_IF_ERROR(write_sensor_files(world, r.options, mav0, frames.records));
   MRVS_RETURN_IF_ERROR(write_truth_files(r, world, staging.path() / "sim0"));
-  MRVS_RETURN_IF_ERROR(write_exposure_csv(staging.path() / "sim0/exposure.csv", exposures));
+  MRVS_RETURN_IF_ERROR(write_exposure_csv(staging.path() / "sim0/exposure.csv", frames.exposures));
   MRVS_RETURN_IF_ERROR(write_illumination_yaml(staging.path() / "sim0/illumination.yaml", world.light));
+  MRVS_RETURN_IF_ERROR(write_people_yaml(staging.path() / "sim0/people.yaml", world.people));
+  MRVS_RETURN_IF_ERROR(write_people_csv(staging.path() / "sim0/people.csv", frames.people));
   MRVS_RETURN_IF_ERROR(write_true_calibration(staging.path() / "sim0/true_calibration",
                                               TrueCalibration{world.true_rig, world.time_offset_ms}));
   MRVS_RETURN_IF_ERROR(write_gnss_files(r, world, staging.path()));

@@ -30,6 +30,8 @@ SimulatorOptions default_options(SceneProfile profile) {
   o.map = outdoor_map_options();
   o.route = test_car_route();
   o.gnss.enabled = true;
+  o.people.view_distance_m = 8.0;  // pedestrians on the sidewalk, seen from the road
+  o.people.path_length_m = 10.0;
   return o;
 }
 
@@ -53,6 +55,7 @@ Status apply_preset(const std::string& preset, SimulatorOptions& o) {
     o.map.misalignment_m = 0.0;
     o.time_offset_ms = 0.0;
     o.calib_error.enabled = false;
+    o.people.count = 0;
     o.gnss.outlier_probability = 0.0;
     return absl::OkStatus();
   }

@@ -4,20 +4,32 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
 #include "mrvs/sim/stereo_renderer.h"
 
 namespace mrvs::sim {
 
 Status StereoRenderer::render_exposure(int cam, const std::vector<SE3d>& T_w_c, const FrameInfo& frame,
-                                       cv::Mat* image) const {
+                                       cv::Mat* image, const std::vector<TimestampNs>& times_ns) const {
   if (T_w_c.empty()) return absl::InvalidArgumentError("StereoRenderer::render_exposure: no pose");
-  if (T_w_c.size() == 1) return render(cam, T_w_c.front(), frame, image);
+  if (!times_ns.empty() && times_ns.size() != T_w_c.size()) {
+    return absl::InvalidArgumentError(
+        fmt::format("StereoRenderer::render_exposure: {} poses but {} times", T_w_c.size(), times_ns.size()));
+  }
+  if (T_w_c.size() == 1) {
+    FrameInfo at = frame;
+    if (!times_ns.empty()) at.t_ns = times_ns.front();
+    return render(cam, T_w_c.front(), at, image);
+  }
   std::vector<float> sum;
-  for (const SE3d& T : T_w_c) {
-    MRVS_ASSIGN_OR_RETURN(const cv::Mat radiance, render_radiance(cam, T));
+  for (std::size_t i = 0; i < T_w_c.size(); ++i) {
+    const SE3d& T = T_w_c[i];
+    MRVS_ASSIGN_OR_RETURN(const cv::Mat radiance,
+                          render_radiance(cam, T, times_ns.empty() ? frame.t_ns : times_ns[i]));
     if (sum.empty()) sum.assign(radiance.total(), 0.0f);
     const float* r = radiance.ptr<float>(0);  // continuous: made by render_radiance
-    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += r[i];
+    for (std::size_t p = 0; p < sum.size(); ++p) sum[p] += r[p];
   }
   return to_image(cam, frame, sum, 1.0f / static_cast<float>(T_w_c.size()), image);
 }

@@ -2,6 +2,7 @@
 // Helpers shared by the renderer's translation units (not installed).
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -18,6 +19,8 @@ struct StereoRenderer::View {
   float max_distance = 0.0f;                         ///< m
   float min_cos = 0.2f;                              ///< floor of |n . d|
   bool mip = false;                                  ///< pixel-centre rays sample the mip pyramid
+  std::vector<PersonBox> people;                     ///< the crowd at the view's time
+  std::vector<Eigen::Vector4i> people_rects;         ///< pixels u0, v0, u1, v1 (inclusive) each may cover
 };
 
 namespace detail {

@@ -21,6 +21,7 @@
 #include "mrvs/sim/calibration_error.h"
 #include "mrvs/sim/exposure_log.h"
 #include "mrvs/sim/map_io.h"
+#include "mrvs/sim/people_plan.h"
 #include "mrvs/sim/test/strapdown.h"
 #include "mrvs/test/temp_dir.h"
 
@@ -436,6 +437,47 @@ TEST_F(GeneratedIndoor, CalibrationErrorRendersWithTheTrueRigAndWritesTheNominal
     EXPECT_GT(cv::norm(image, *nominal, cv::NORM_L1) / static_cast<double>(image.total()), 2.0)
         << png << ": the true rig moves the image";
   }
+}
+
+// Moving people: planned clear of the camera, crossing its view, counted per frame, in the
+// images only where counted, never in the map.
+TEST_F(GeneratedIndoor, PeopleCrossTheViewClearOfTheCameraAndStayOutOfTheMap) {
+  GeneratorRequest r = test::indoor_request(dir_->path() / "people");
+  r.options.people.count = 2;
+  ASSERT_TRUE(generate_dataset(r).ok());
+  auto world = build_world(r);
+  ASSERT_TRUE(world.ok()) << world.status();
+  ASSERT_EQ(world->people.size(), 2u);
+  const auto rows = read_people_csv(dir_->path() / "people/sim0/people.csv");
+  ASSERT_TRUE(rows.ok()) << rows.status();
+  const std::size_t frames = world->grid.camera_true_ns.size();
+  ASSERT_EQ(rows->size(), frames);
+  const PeopleOptions& o = r.options.people;
+  int seen = 0;
+  for (std::size_t k = 0; k < frames; ++k) {
+    EXPECT_EQ((*rows)[k].t_ns, world->grid.camera_stamp_ns[k]);
+    const TimestampNs t = world->grid.camera_true_ns[k];
+    for (const Walker& w : world->people) {
+      const double gap = (w.centre(t).head<2>() - world->frame_pose(k).translation().head<2>()).norm();
+      EXPECT_GE(gap, o.clearance_m + 0.5 * std::hypot(o.width_m, o.depth_m)) << k;
+    }
+    seen += (*rows)[k].pixels[0] > 0;
+    const std::string png = fmt::format("mav0/cam0/data/{}.png", world->grid.camera_stamp_ns[k]);
+    const cv::Mat with = cv::imread((dir_->path() / "people" / png).string(), cv::IMREAD_GRAYSCALE);
+    const cv::Mat without = cv::imread((dir_->path() / "seq" / png).string(), cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(with.empty() || without.empty()) << png;
+    cv::Mat diff;
+    cv::compare(with, without, diff, cv::CMP_NE);
+    const int changed = cv::countNonZero(diff);
+    EXPECT_LE(changed, 1.1 * static_cast<double>((*rows)[k].pixels[0]) + 50.0) << png;  // + edge pixels
+    EXPECT_GE(changed, 0.8 * static_cast<double>((*rows)[k].pixels[0])) << png;
+  }
+  // 20 frames of a 1 s window: each person is drawn to be in front of cam0 at some time of it.
+  EXPECT_GT(seen, 0);
+  const auto plain = test::read_tree(dir_->path() / "seq");
+  const auto people = test::read_tree(dir_->path() / "people");
+  EXPECT_TRUE(plain.at("mav0/pointcloud0/data.ply") == people.at("mav0/pointcloud0/data.ply"))
+      << "not in the map";
 }
 
 // Bad input: a clear error, nothing at --out, no staging folder left in its parent.

@@ -30,6 +30,7 @@ enum class Stream : std::uint64_t {
   kGnss = 12,
   kIllumination = 13,
   kCalibration = 14,
+  kPeople = 15,
 };
 
 using mrvs::mix64;

@@ -73,6 +73,7 @@ struct World {
   PriorMap map;
   std::vector<GnssSimFix> gnss;  ///< GNSS fixes with their truth; empty when gnss.enabled is off
   Illumination light;            ///< render.dim_area: centred on a drawn point of the trajectory
+  std::vector<Walker> people;    ///< people.count walkers crossing the view
 
   /// T_w_b at camera frame k (its true, IMU-clock time).
   const SE3d& frame_pose(std::size_t k) const { return states[grid.camera_imu_index[k]].T_w_b; }

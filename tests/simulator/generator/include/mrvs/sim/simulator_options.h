@@ -39,6 +39,32 @@ struct SceneKnobs : config::OptionsEquality<SceneKnobs> {
   }
 };
 
+/// Moving people (people.h): `count` walkers, each crossing the view of cam0 at a drawn time
+/// of the window, view_distance_m ahead of it, walking back and forth across it.
+struct PeopleOptions : config::OptionsEquality<PeopleOptions> {
+  int count = 0;                 ///< walkers (0: none)
+  double speed_mps = 1.3;        ///< walking speed, m/s
+  double height_m = 1.75;        ///< box height, m
+  double width_m = 0.5;          ///< shoulder width, m
+  double depth_m = 0.3;          ///< front to back, m
+  double path_length_m = 5.0;    ///< back-and-forth path, m (clipped to the scene)
+  double view_distance_m = 2.5;  ///< the path crosses cam0's view this far ahead, m
+  double clearance_m = 0.5;      ///< never closer to the body or a camera (horizontally), m
+
+  template <class V>
+  void visit(V& v) {
+    using namespace mrvs::config::constraints;
+    v("count", count, in_range(0, 50), "walking people in the images, not in the map");
+    v("speed_mps", speed_mps, in_range(0.1, 5.0), "walking speed, m/s");
+    v("height_m", height_m, in_range(0.5, 2.5), "height, m");
+    v("width_m", width_m, in_range(0.1, 2.0), "width, m");
+    v("depth_m", depth_m, in_range(0.1, 2.0), "depth, m");
+    v("path_length_m", path_length_m, in_range(1.0, 100.0), "back-and-forth path length, m");
+    v("view_distance_m", view_distance_m, in_range(0.5, 100.0), "crosses cam0's view this far ahead, m");
+    v("clearance_m", clearance_m, in_range(0.0, 10.0), "horizontal clearance from the body and cameras, m");
+  }
+};
+
 struct SimulatorOptions : config::OptionsEquality<SimulatorOptions> {
   std::int64_t seed = 1;                ///< one seed for every random stream
   double time_offset_ms = 0.0;          ///< camera-IMU offset t_d: t_imu = t_cam + t_d, ms
@@ -51,6 +77,7 @@ struct SimulatorOptions : config::OptionsEquality<SimulatorOptions> {
   MapOptions map;                       ///< prior-map density, noise, holes, misalignment
   GnssSimOptions gnss;                  ///< GNSS fixes (outdoor default: on)
   CalibrationErrorOptions calib_error;  ///< the rendering rig differs from the written one
+  PeopleOptions people;                 ///< walking people
 
   template <class V>
   void visit(V& v) {
@@ -67,6 +94,7 @@ struct SimulatorOptions : config::OptionsEquality<SimulatorOptions> {
     v.section("map", map, "survey LiDAR prior map");
     v.section("gnss", gnss, "GNSS position fixes of a roof antenna (mav0/gnss0)");
     v.section("calib_error", calib_error, "true rig vs the calibration written in sensor.yaml");
+    v.section("people", people, "people walking through the images (not in the map)");
   }
 };
 

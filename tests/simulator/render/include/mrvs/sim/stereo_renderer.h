@@ -20,6 +20,7 @@
 #include "mrvs/config/calibration.h"
 #include "mrvs/core/status.h"
 #include "mrvs/geometry/se3.h"
+#include "mrvs/sim/people.h"
 #include "mrvs/sim/ray_table.h"
 #include "mrvs/sim/render_options.h"
 #include "mrvs/sim/scene.h"
@@ -31,6 +32,7 @@ struct FrameInfo {
   std::int64_t index = 0;    ///< frame number (keys the image noise)
   double gain = 1.0;         ///< frame gain g_k (exposure_gains() times AutoExposure), both cameras
   double analog_gain = 1.0;  ///< A_k, amplifies the noise too (photometry.h)
+  TimestampNs t_ns = 0;      ///< where the moving people are (with_people)
 };
 
 /// The scene's light (render.dim_area): 1 everywhere but in a dim area around a vertical
@@ -88,6 +90,11 @@ class StereoRenderer {
   /// The same renderer under `light` (InvalidArgument for a level outside (0, 1] or r <= 0).
   StatusOr<StereoRenderer> with_illumination(const Illumination& light) const;
   const Illumination& illumination() const { return light_; }
+  /// The same renderer with people walking through the images (people.h); the truth
+  /// functions (render_truth, cast_pixel, correspondence, true_flow) see the static scene only.
+  StereoRenderer with_people(std::vector<Walker> walkers) const;
+  /// Pixel-centre rays of camera `cam` at pose T_w_c whose nearest hit at time t is a person.
+  std::int64_t people_pixels(int cam, const SE3d& T_w_c, TimestampNs t_ns) const;
 
   const RenderOptions& options() const { return options_; }
   const camera::CameraModel& camera(int cam) const { return *cameras_[static_cast<std::size_t>(cam)]; }
@@ -105,17 +112,19 @@ class StereoRenderer {
   StatusOr<std::array<cv::Mat, 2>> render_stereo(const SE3d& T_w_b, const FrameInfo& frame) const;
 
   /// Camera `cam` integrated over its exposure (motion blur): the mean radiance of the poses
-  /// T_w_c (the exposure's sub-samples, evenly spaced in time), then the DN mapping. One pose:
-  /// render(). InvalidArgument for none, a non-finite one or a bad camera index.
-  Status render_exposure(int cam, const std::vector<SE3d>& T_w_c, const FrameInfo& frame,
-                         cv::Mat* image) const;
+  /// T_w_c (the exposure's sub-samples, evenly spaced in time, at `times_ns` when given,
+  /// else all at frame.t_ns), then the DN mapping. One pose: render(). InvalidArgument for
+  /// none, a non-finite one, a bad camera index or times of another size.
+  Status render_exposure(int cam, const std::vector<SE3d>& T_w_c, const FrameInfo& frame, cv::Mat* image,
+                         const std::vector<TimestampNs>& times_ns = {}) const;
   /// Sub-samples an exposure of camera `cam` from pose T_w_a to T_w_b needs for no surface
   /// point seen at a 9 x 7 grid of pixels (the sky: its direction) to move more than step_px
   /// between two: ceil(largest motion / step_px), in [1, max_samples].
   int exposure_samples(int cam, const SE3d& T_w_a, const SE3d& T_w_b, double step_px, int max_samples) const;
 
-  /// Radiance in [0, 1] before the DN mapping (CV_32F), as the image render computes it.
-  StatusOr<cv::Mat> render_radiance(int cam, const SE3d& T_w_c) const;
+  /// Radiance in [0, 1] before the DN mapping (CV_32F), as the image render computes it
+  /// (people where they are at t_ns).
+  StatusOr<cv::Mat> render_radiance(int cam, const SE3d& T_w_c, TimestampNs t_ns = 0) const;
   /// Depth, face id, face (u, v) and mip level of every pixel centre ray.
   StatusOr<TruthImage> render_truth(int cam, const SE3d& T_w_c) const;
 
@@ -142,7 +151,12 @@ class StereoRenderer {
 
   StereoRenderer() = default;
   Status check_request(int cam, const SE3d& T_w_c) const;
-  View make_view(int cam, const SE3d& T_w_c) const;
+  View make_view(int cam, const SE3d& T_w_c, TimestampNs t_ns = 0) const;
+  /// The nearest person along pixel (u, v)'s ray d_w closer than max_t: its distance and index.
+  std::optional<std::pair<float, int>> nearest_person(const View& view, int u, int v,
+                                                      const Eigen::Vector3f& d_w, float max_t) const;
+  /// Albedo times light of person `index` where ray d_w meets it at distance t.
+  float shade_person(const View& view, const Eigen::Vector3f& d_w, std::pair<float, int> hit) const;
   float shade_center(const View& view, int u, int v, int* face) const;
   float shade_supersampled(const View& view, int u, int v) const;
   float sky_or_albedo(const View& view, const Eigen::Vector3f& d_w, float lod_scale) const;
@@ -160,6 +174,7 @@ class StereoRenderer {
   std::array<std::shared_ptr<const RayTable>, 2> tables_;
   std::shared_ptr<const std::vector<FaceInfo>> faces_;
   Illumination light_;
+  std::shared_ptr<const std::vector<Walker>> walkers_;
 };
 
 }  // namespace mrvs::sim
