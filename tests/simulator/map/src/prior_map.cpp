@@ -76,30 +76,32 @@ std::vector<FaceFrame> face_frames(const Scene& scene) {
   return frames;
 }
 
-/// Keeps the first and last samples and every sample at least `step` from the last kept one.
-std::vector<Vec3d> thin_trajectory(const std::vector<Vec3d>& trajectory_w, double step) {
-  std::vector<Vec3d> out;
-  for (const Vec3d& p : trajectory_w) {
-    if (out.empty() || (p - out.back()).norm() >= step) out.push_back(p);
-  }
-  if ((trajectory_w.back() - out.back()).norm() > 0.0) out.push_back(trajectory_w.back());
-  return out;
-}
-
-double nearest_distance(const std::vector<Vec3d>& points, const Vec3d& p) {
-  double best = std::numeric_limits<double>::infinity();
-  for (const Vec3d& q : points) best = std::min(best, (q - p).squaredNorm());
-  return std::sqrt(best);
-}
-
 /// Tiles along one side of a face.
 std::int64_t tiles_along(double size, double tile_size) {
   return std::max<std::int64_t>(1, std::llround(size / tile_size));
 }
 
 /// Tiles of every in-map face with their spacing and cell counts.
+/// Scanner model: the spacing the densest station's angular lattice gives at a tile centre,
+/// r * step / sqrt(cos(incidence)) (the same area per return), clamped to
+/// [scan_min_spacing_m, spacing_far_m]; spacing_far_m when no station faces it in range.
+double scanner_spacing(const MapOptions& o, const FaceFrame& fr, const Vec3d& centre,
+                       const std::vector<SurveyStation>& stations) {
+  double best = o.spacing_far_m;
+  for (const SurveyStation& s : stations) {
+    const Vec3d to_station = s.position_w - centre;
+    const double r = to_station.norm();
+    const double cos_incidence = fr.normal.dot(to_station) / std::max(r, 1e-12);
+    if (!s.used || cos_incidence <= 0.0 || (o.station_max_range_m > 0.0 && r > o.station_max_range_m))
+      continue;
+    best = std::min(best, 1e-3 * o.scan_step_mrad * r / std::sqrt(std::max(cos_incidence, 0.1)));
+  }
+  return std::clamp(best, std::min(o.scan_min_spacing_m, o.spacing_far_m), o.spacing_far_m);
+}
+
 StatusOr<std::vector<Tile>> make_tiles(const Scene& scene, const std::vector<FaceFrame>& frames,
-                                       const MapOptions& options, const std::vector<Vec3d>& trajectory_w) {
+                                       const MapOptions& options, const std::vector<Vec3d>& trajectory_w,
+                                       const std::vector<SurveyStation>& stations) {
   const std::vector<Face>& faces = scene.faces();
   std::int64_t count = 0;
   for (const Face& f : faces) {
@@ -131,14 +133,17 @@ StatusOr<std::vector<Tile>> make_tiles(const Scene& scene, const std::vector<Fac
       }
     }
   }
-  const std::vector<Vec3d> thinned = thin_trajectory(trajectory_w, 0.25 * options.tile_size_m);
+  const std::vector<Vec3d> thinned = thin_path(trajectory_w, 0.25 * options.tile_size_m);
   const auto n = static_cast<std::int64_t>(tiles.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t k = 0; k < n; ++k) {
     Tile& t = tiles[static_cast<std::size_t>(k)];
     const Vec3d centre =
         frames[static_cast<std::size_t>(t.face)].point(t.u0 + 0.5 * t.size_u, t.v0 + 0.5 * t.size_v);
-    const double spacing = tile_spacing(options, nearest_distance(thinned, centre), centre.z());
+    const FaceFrame& fr = frames[static_cast<std::size_t>(t.face)];
+    const double spacing = options.model == MapModel::kScanner
+                               ? scanner_spacing(options, fr, centre, stations)
+                               : tile_spacing(options, distance_to_path(thinned, centre), centre.z());
     t.nu = static_cast<int>(std::max(1L, std::lround(t.size_u / spacing)));
     t.nv = static_cast<int>(std::max(1L, std::lround(t.size_v / spacing)));
   }
@@ -200,19 +205,41 @@ std::vector<int> tile_station_order(const Tile& t, const FaceFrame& fr, const st
   return order;
 }
 
-/// Draws every cell of one tile and keeps the samples some station sees.
+/// Scanner model: true when station `s` at `station` gets a return from p (incidence
+/// dropout, drawn per sample and station; nothing below scan_min_elevation_deg).
+bool scanner_returns(const MapOptions& o, const Vec3d& station, const Vec3d& p, const Vec3d& n,
+                     const CounterRng& jitter, const Tile& t, std::int32_t cell, int s) {
+  const Vec3d d = p - station;
+  const double r = d.norm();
+  if (!(r > 0.0) || d.z() < r * std::sin(o.scan_min_elevation_deg * kPi / 180.0)) return false;
+  const double cos_incidence = std::abs(n.dot(d)) / r;
+  const double start = std::cos(o.dropout_start_deg * kPi / 180.0),
+               full = std::cos(o.dropout_full_deg * kPi / 180.0);
+  if (cos_incidence >= start) return true;
+  const double keep = start > full ? (cos_incidence - full) / (start - full) : 0.0;
+  const auto tile_station =
+      (static_cast<std::uint64_t>(t.index) << 20) ^ static_cast<std::uint64_t>(s) ^ (1ULL << 62);
+  return jitter.uniform(static_cast<std::uint64_t>(t.face), tile_station, static_cast<std::uint64_t>(cell)) <
+         keep;
+}
+
+/// Draws every cell of one tile and keeps the samples some station sees (the nearest that
+/// does; with the scanner model, the nearest that also gets a return).
 std::vector<KeptCell> scan_tile(const Scene& scene, const Tile& t, const FaceFrame& fr,
                                 const std::vector<int>& station_order,
-                                const std::vector<SurveyStation>& stations, double max_range,
+                                const std::vector<SurveyStation>& stations, const MapOptions& o,
                                 const CounterRng& jitter) {
   std::vector<KeptCell> kept;
   if (station_order.empty()) return kept;
+  const bool scanner = o.model == MapModel::kScanner;
   const auto cells = static_cast<std::int32_t>(t.cells());
   for (std::int32_t c = 0; c < cells; ++c) {
     const Eigen::Vector2d uv = cell_sample(t, c, jitter);
     const Vec3d p = fr.point(uv.x(), uv.y());
     for (int s : station_order) {
-      if (station_sees(scene, stations[static_cast<std::size_t>(s)].position_w, p, fr.normal, max_range)) {
+      const Vec3d& station = stations[static_cast<std::size_t>(s)].position_w;
+      if (scanner && !scanner_returns(o, station, p, fr.normal, jitter, t, c, s)) continue;
+      if (station_sees(scene, station, p, fr.normal, o.station_max_range_m)) {
         kept.push_back({c, s});
         break;
       }
@@ -236,8 +263,7 @@ std::vector<std::vector<KeptCell>> scan_tiles(const Scene& scene, const std::vec
     const FaceFrame& fr = frames[static_cast<std::size_t>(t.face)];
     const std::vector<int> order = tile_station_order(t, fr, facing[static_cast<std::size_t>(t.face)],
                                                       stations, options.station_max_range_m);
-    kept[static_cast<std::size_t>(k)] =
-        scan_tile(scene, t, fr, order, stations, options.station_max_range_m, jitter);
+    kept[static_cast<std::size_t>(k)] = scan_tile(scene, t, fr, order, stations, options, jitter);
   }
   return kept;
 }
@@ -282,19 +308,6 @@ std::vector<char> choose_holes(const std::vector<Tile>& tiles, const std::vector
   return removed;
 }
 
-/// The misalignment T_map_world: rotation misalignment_deg about a random axis, translation
-/// misalignment_m along a random direction (Stream::kMisalignment).
-SE3d make_misalignment(const MapOptions& options, std::uint64_t seed) {
-  if (options.misalignment_deg == 0.0 && options.misalignment_m == 0.0) return SE3d();
-  const CounterRng rng(seed, Stream::kMisalignment);
-  Vec3d axis(rng.normal(0), rng.normal(1), rng.normal(2));
-  Vec3d direction(rng.normal(3), rng.normal(4), rng.normal(5));
-  axis.normalize();
-  direction.normalize();
-  const Vec3d phi = axis * (options.misalignment_deg * kPi / 180.0);
-  return SE3d(so3::exp_quat<double>(phi), direction * options.misalignment_m);
-}
-
 /// Everything the point writer needs besides the tile.
 struct EmitContext {
   const Scene* scene = nullptr;
@@ -325,9 +338,13 @@ void emit_tile(const EmitContext& ctx, const Tile& t, const std::vector<KeptCell
     auto draw = [&](double sigma, std::uint64_t k) {
       return sigma > 0.0 ? sigma * ctx.noise.normal(face, tile, k) : 0.0;
     };
-    const Vec3d noisy = p + fr.normal * draw(o.noise_normal_sigma_m, key) +
-                        fr.axis_u * draw(o.noise_tangent_sigma_m, key + 1) +
-                        fr.axis_v * draw(o.noise_tangent_sigma_m, key + 2);
+    const double range = to_station.norm();
+    const Vec3d noisy = o.model == MapModel::kScanner
+                            ? Vec3d(p - to_station / std::max(range, 1e-12) *
+                                            draw(o.range_noise_m + o.range_noise_per_m * range, key))
+                            : Vec3d(p + fr.normal * draw(o.noise_normal_sigma_m, key) +
+                                    fr.axis_u * draw(o.noise_tangent_sigma_m, key + 1) +
+                                    fr.axis_v * draw(o.noise_tangent_sigma_m, key + 2));
     const double noisy_intensity = intensity + draw(o.intensity_noise_sigma, key + 3);
     clean[i].position = p.cast<float>();
     clean[i].intensity = static_cast<float>(std::clamp(intensity, 0.0, 1.0));
@@ -400,6 +417,17 @@ void emit_points(const EmitContext& ctx, const std::vector<Tile>& tiles,
 
 }  // namespace
 
+SE3d map_misalignment(const MapOptions& options, std::uint64_t seed) {
+  if (options.misalignment_deg == 0.0 && options.misalignment_m == 0.0) return SE3d();
+  const CounterRng rng(seed, Stream::kMisalignment);
+  Vec3d axis(rng.normal(0), rng.normal(1), rng.normal(2));
+  Vec3d direction(rng.normal(3), rng.normal(4), rng.normal(5));
+  axis.normalize();
+  direction.normalize();
+  const Vec3d phi = axis * (options.misalignment_deg * kPi / 180.0);
+  return SE3d(so3::exp_quat<double>(phi), direction * options.misalignment_m);
+}
+
 StatusOr<PriorMap> sample_prior_map(const Scene& scene, const std::vector<Vec3d>& trajectory_w,
                                     const MapOptions& options, std::uint64_t seed) {
   MRVS_RETURN_IF_ERROR(check_inputs(trajectory_w, options));
@@ -407,12 +435,13 @@ StatusOr<PriorMap> sample_prior_map(const Scene& scene, const std::vector<Vec3d>
   MRVS_ASSIGN_OR_RETURN(map.stations, survey_stations(scene, trajectory_w, options));
   for (const SurveyStation& s : map.stations) map.counts.stations_used += s.used ? 1 : 0;
   const std::vector<FaceFrame> frames = face_frames(scene);
-  MRVS_ASSIGN_OR_RETURN(const std::vector<Tile> tiles, make_tiles(scene, frames, options, trajectory_w));
+  MRVS_ASSIGN_OR_RETURN(const std::vector<Tile> tiles,
+                        make_tiles(scene, frames, options, trajectory_w, map.stations));
   MRVS_RETURN_IF_ERROR(check_size(tiles));
   const std::vector<std::vector<KeptCell>> kept =
       scan_tiles(scene, frames, tiles, map.stations, options, seed);
 
-  map.T_map_world = make_misalignment(options, seed);
+  map.T_map_world = map_misalignment(options, seed);
   EmitContext ctx;
   ctx.scene = &scene;
   ctx.frames = &frames;

@@ -1,6 +1,7 @@
 // Survey stations along the trajectory, and the per-tile spacing and intensity models.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -91,6 +92,21 @@ StatusOr<std::vector<SurveyStation>> survey_stations(const Scene& scene,
     station.used = station_usable(scene, station.position_w);
   }
   return stations;
+}
+
+std::vector<Vec3d> thin_path(const std::vector<Vec3d>& path, double step) {
+  std::vector<Vec3d> out;
+  for (const Vec3d& p : path) {
+    if (out.empty() || (p - out.back()).norm() >= step) out.push_back(p);
+  }
+  if (!path.empty() && (path.back() - out.back()).norm() > 0.0) out.push_back(path.back());
+  return out;
+}
+
+double distance_to_path(const std::vector<Vec3d>& path, const Vec3d& p) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Vec3d& q : path) best = std::min(best, (q - p).squaredNorm());
+  return std::sqrt(best);
 }
 
 double tile_spacing(const MapOptions& options, double distance_m, double height_m) {

@@ -55,6 +55,14 @@ inline Scene indoor_test_scene(const std::vector<Vec3d>& trajectory) {
   return std::move(scene).value();
 }
 
+/// Independent visibility: `station` sees point `p` of face `f` (front side, shadow ray to a
+/// point 2 mm in front of the face).
+inline bool sees(const Scene& scene, const Face& f, const Vec3d& station, const Vec3d& p) {
+  if ((station - f.origin).dot(f.normal) <= 0.0) return false;
+  const Vec3d target = p + 0.002 * f.normal.normalized();
+  return !scene.occluded(station.cast<float>(), target.cast<float>(), Visibility::kSurvey);
+}
+
 /// (u, v, w) of `p` in the face frame: w is the signed distance along the normal.
 inline Vec3d face_coordinates(const Face& f, const Vec3d& p) {
   const Vec3d d = p - f.origin;

@@ -55,14 +55,6 @@ bool some_station_faces(const Face& f, const std::vector<SurveyStation>& station
   return false;
 }
 
-/// Independent visibility: `station` sees point `p` of face `f` (front side, shadow ray to a
-/// point 2 mm in front of the face).
-bool sees(const Scene& scene, const Face& f, const Vec3d& station, const Vec3d& p) {
-  if ((station - f.origin).dot(f.normal) <= 0.0) return false;
-  const Vec3d target = p + 0.002 * f.normal.normalized();
-  return !scene.occluded(station.cast<float>(), target.cast<float>(), Visibility::kSurvey);
-}
-
 class PriorMapTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {

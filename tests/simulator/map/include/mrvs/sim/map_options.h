@@ -20,11 +20,25 @@ enum class HoleMode {
   kFaces,  ///< whole faces
 };
 
+/// How the map's points are made.
+enum class MapModel {
+  kSurface,  ///< spacing by distance to the trajectory, noise along the face (spacing_*, noise_*)
+  kScanner,  ///< spacing, dropout and range noise of laser scanners at the stations (scan_*, range_*)
+};
+
 /// Prior-map options. Defaults: the indoor "Vicon room" survey of simulator.md section 5.
 struct MapOptions : config::OptionsEquality<MapOptions> {
-  double spacing_near_m = 0.01;          ///< sample spacing on tiles within near_distance_m, metres
-  double spacing_far_m = 0.02;           ///< largest spacing (far tiles), metres
-  double near_distance_m = 2.5;          ///< s = clamp(spacing_near * d / near_distance, near, far), metres
+  MapModel model = MapModel::kSurface;    ///< surface sampling or scanner rays
+  double scan_step_mrad = 0.75;           ///< scanner: angular step of the scan lattice, mrad
+  double scan_min_spacing_m = 0.004;      ///< scanner: the merged scans are thinned to no closer, m
+  double scan_min_elevation_deg = -60.0;  ///< scanner: nothing below this (the tripod), deg
+  double range_noise_m = 0.0008;          ///< scanner: range noise sigma = this + range_noise_per_m * r, m
+  double range_noise_per_m = 0.0003;      ///< scanner: growth of the range noise with range, m / m
+  double dropout_start_deg = 60.0;        ///< scanner: returns start to drop beyond this incidence, deg
+  double dropout_full_deg = 85.0;         ///< scanner: no return beyond this incidence, deg
+  double spacing_near_m = 0.01;           ///< sample spacing on tiles within near_distance_m, metres
+  double spacing_far_m = 0.02;            ///< largest spacing (far tiles), metres
+  double near_distance_m = 2.5;           ///< s = clamp(spacing_near * d / near_distance, near, far), metres
   double tile_size_m = 0.5;              ///< side of a sampling tile (spacing and holes are per tile), metres
   double far_above_z_m = 0.0;            ///< tiles whose centre is higher get spacing_far (0 = off), metres
   double noise_normal_sigma_m = 0.003;   ///< position noise along the face normal, metres
@@ -47,6 +61,18 @@ struct MapOptions : config::OptionsEquality<MapOptions> {
   template <class V>
   void visit(V& v) {
     using namespace mrvs::config::constraints;
+    v("model", model,
+      enum_names<MapModel>({{"surface", MapModel::kSurface}, {"scanner", MapModel::kScanner}}),
+      "surface (spacing by distance to the path) | scanner (laser scanners at the stations)");
+    v("scan_step_mrad", scan_step_mrad, in_range(0.01, 100.0), "scanner angular step, mrad");
+    v("scan_min_spacing_m", scan_min_spacing_m, in_range(0.0005, 1.0), "scanner: thinned to no closer, m");
+    v("scan_min_elevation_deg", scan_min_elevation_deg, in_range(-90.0, 0.0),
+      "scanner: lowest elevation, deg");
+    v("range_noise_m", range_noise_m, in_range(0.0, 1.0), "scanner range noise at 0 m, m");
+    v("range_noise_per_m", range_noise_per_m, in_range(0.0, 0.1), "scanner range noise growth, m per m");
+    v("dropout_start_deg", dropout_start_deg, in_range(0.0, 90.0),
+      "scanner: returns drop beyond this incidence");
+    v("dropout_full_deg", dropout_full_deg, in_range(0.0, 90.0), "scanner: no return beyond this incidence");
     v("spacing_near_m", spacing_near_m, in_range(0.001, 10.0), "sample spacing near the trajectory, m");
     v("spacing_far_m", spacing_far_m, in_range(0.001, 10.0), "largest sample spacing, m (>= spacing_near_m)");
     v("near_distance_m", near_distance_m, at_least(0.0), "distance up to which spacing_near_m holds, m");

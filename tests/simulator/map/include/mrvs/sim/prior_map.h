@@ -1,9 +1,19 @@
 #pragma once
-// The synthetic "survey LiDAR" prior map (simulator.md section 5, surface mode): every
-// in-map face of the scene is covered by a stratified jittered grid (one uniform sample per
-// cell), the spacing growing with the distance to the trajectory per tile; a sample is kept
-// only if a survey station sees it; then intensity, position noise, holes and a global
-// misalignment are applied. Deterministic by seed and independent of the thread count.
+// The synthetic "survey LiDAR" prior map (simulator.md section 5): every in-map face of the
+// scene is covered by a stratified jittered grid (one uniform sample per cell); a sample is
+// kept only if a survey station sees it (the nearest that does); then intensity, position
+// noise, holes and a global misalignment are applied. Deterministic by seed and independent
+// of the thread count. Two models (map.model):
+// - surface: the spacing grows with the tile's distance to the trajectory (spacing_*), the
+//   position noise is along the face normal and axes;
+// - scanner: a terrestrial laser scanner at each station, its scans merged as a registered
+//   survey is: a tile gets the spacing the densest station's angular lattice gives there,
+//   r * scan_step / sqrt(cos(incidence)) (the same area per return), clamped to
+//   [scan_min_spacing_m, spacing_far_m]; a station returns from a sample only above
+//   scan_min_elevation_deg and, beyond dropout_start_deg of incidence, with a probability
+//   falling linearly to 0 at dropout_full_deg (then the next nearest station that sees it
+//   may); the range noise, sigma = range_noise_m + range_noise_per_m * r, is along that
+//   station's ray; occlusion shadows are the stations' visibility.
 #include <cstdint>
 #include <vector>
 
@@ -65,6 +75,11 @@ StatusOr<std::vector<SurveyStation>> survey_stations(const Scene& scene,
                                                      const std::vector<Vec3d>& trajectory_w,
                                                      const MapOptions& options);
 
+/// The first and last positions of `path` and every one at least `step` from the last kept.
+std::vector<Vec3d> thin_path(const std::vector<Vec3d>& path, double step);
+/// Distance from p to the nearest position of `path` (infinity for an empty path).
+double distance_to_path(const std::vector<Vec3d>& path, const Vec3d& p);
+
 /// Sample spacing (metres) of a tile whose centre is `distance_m` from the nearest trajectory
 /// sample and at height `height_m`: clamp(s_near * d / d_near, s_near, s_far), or s_far above
 /// far_above_z_m when that is > 0.
@@ -81,5 +96,9 @@ double model_intensity(const MapOptions& options, double albedo, double cos_inci
 /// kMisalignment. OpenMP-parallel, identical output for any thread count.
 StatusOr<PriorMap> sample_prior_map(const Scene& scene, const std::vector<Vec3d>& trajectory_w,
                                     const MapOptions& options, std::uint64_t seed);
+
+/// T_map_world: rotation misalignment_deg about a random axis, translation misalignment_m
+/// along a random direction (Stream::kMisalignment); identity when both are 0.
+SE3d map_misalignment(const MapOptions& options, std::uint64_t seed);
 
 }  // namespace mrvs::sim
