@@ -122,16 +122,17 @@ std::int64_t StereoRenderer::people_pixels(int cam, const SE3d& T_w_c, Timestamp
 #pragma omp parallel for schedule(dynamic, 8) reduction(+ : count)
     for (int v = r[1]; v <= r[3]; ++v) {
       for (int u = r[0]; u <= r[2]; ++u) {
-        const Eigen::Vector3f d_w = view.R_w_c * view.table->center(u, v);
-        const std::optional<Hit> hit = scene_->intersect(view.origin, d_w, view.max_distance);
-        const auto person = nearest_person(view, u, v, d_w, hit ? hit->distance : view.max_distance);
         // Counted once: by the first rect that holds the pixel.
         bool first = true;
         for (std::size_t j = 0; j < i; ++j) {
           const Eigen::Vector4i& q = view.people_rects[j];
           if (u >= q[0] && v >= q[1] && u <= q[2] && v <= q[3]) first = false;
         }
-        count += (person && first) ? 1 : 0;
+        if (!first) continue;
+        const Eigen::Vector3f d_w = view.R_w_c * view.table->center(u, v);
+        const auto person = nearest_person(view, u, v, d_w, view.max_distance);
+        // The static scene is cast only up to the person: a face in front hides them.
+        if (person && !scene_->intersect(view.origin, d_w, person->first)) ++count;
       }
     }
   }
