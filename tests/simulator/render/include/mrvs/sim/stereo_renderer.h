@@ -159,7 +159,6 @@ class StereoRenderer {
   float shade_person(const View& view, const Eigen::Vector3f& d_w, std::pair<float, int> hit) const;
   float shade_center(const View& view, int u, int v, int* face) const;
   float shade_supersampled(const View& view, int u, int v) const;
-  float sky_or_albedo(const View& view, const Eigen::Vector3f& d_w, float lod_scale) const;
   void render_pass(const View& view, std::vector<float>* radiance, std::vector<int>* faces) const;
   void refine_edges(const View& view, const std::vector<int>& faces, std::vector<float>* radiance) const;
   /// The DN image of camera `cam` from its radiance (row-major) times `scale` (photometry.h).
