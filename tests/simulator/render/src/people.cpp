@@ -64,6 +64,11 @@ std::vector<PersonBox> people_at(const std::vector<Walker>& walkers, TimestampNs
 
 std::optional<float> PersonBox::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& d,
                                           float max_t) const {
+  // Cheap reject first: the ray's xy line passes farther from the upright axis than the
+  // box's horizontal half-diagonal (the box lies within that vertical cylinder).
+  const float wx = centre_w.x() - origin.x(), wy = centre_w.y() - origin.y();
+  const float cross = d.x() * wy - d.y() * wx, dxy2 = d.x() * d.x() + d.y() * d.y();
+  if (cross * cross > (half.x() * half.x() + half.y() * half.y()) * dxy2) return std::nullopt;
   const Eigen::Vector3f o = R_p_w * (origin - centre_w);
   const Eigen::Vector3f v = R_p_w * d;
   float t_near = 0.0f, t_far = max_t;

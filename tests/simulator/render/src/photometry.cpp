@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -96,7 +97,7 @@ PixelPhotometry::PixelPhotometry(const RenderOptions& options, const camera::Cam
       rng_(noise_seed, Stream::kImageNoise),
       cam_(static_cast<std::uint64_t>(cam)),
       frame_(static_cast<std::uint64_t>(frame)),
-      width_(static_cast<std::uint64_t>(camera.width())) {
+      pairs_per_row_(static_cast<std::uint64_t>(camera.width() + 1) / 2) {
   // r_max: the farthest pixel-centre corner from the principal point.
   double r2_max = 0.0;
   for (const double u : {0.0, camera.width() - 1.0}) {
@@ -122,14 +123,38 @@ double PixelPhotometry::noise_sigma(double clean) const {
 
 double PixelPhotometry::noise(double clean, int u, int v) const {
   if (!has_noise_) return 0.0;
-  const std::uint64_t pixel = static_cast<std::uint64_t>(v) * width_ + static_cast<std::uint64_t>(u);
-  return noise_sigma(clean) * rng_.normal(cam_, frame_, pixel);
+  const std::uint64_t pair =
+      static_cast<std::uint64_t>(v) * pairs_per_row_ + static_cast<std::uint64_t>(u / 2);
+  const std::pair<double, double> n = rng_.normal_pair(cam_, frame_, pair);
+  return noise_sigma(clean) * (u % 2 == 0 ? n.first : n.second);
 }
 
 std::uint8_t PixelPhotometry::dn(double radiance, int u, int v) const {
   const double clean = clean_value(radiance, u, v);
   const double value = std::round(clean + noise(clean, u, v));
   return static_cast<std::uint8_t>(std::clamp(value, 0.0, 255.0));
+}
+
+void PixelPhotometry::dn_row(const float* radiance, float scale, int v, int width, std::uint8_t* out) const {
+  auto to_dn = [](double value) {
+    return static_cast<std::uint8_t>(std::clamp(std::round(value), 0.0, 255.0));
+  };
+  for (int u = 0; u < width; u += 2) {
+    const double c0 = clean_value(radiance[u] * scale, u, v);
+    if (!has_noise_) {
+      out[u] = to_dn(c0);
+      if (u + 1 < width) out[u + 1] = to_dn(clean_value(radiance[u + 1] * scale, u + 1, v));
+      continue;
+    }
+    const std::uint64_t pair =
+        static_cast<std::uint64_t>(v) * pairs_per_row_ + static_cast<std::uint64_t>(u / 2);
+    const std::pair<double, double> n = rng_.normal_pair(cam_, frame_, pair);
+    out[u] = to_dn(c0 + noise_sigma(c0) * n.first);
+    if (u + 1 < width) {
+      const double c1 = clean_value(radiance[u + 1] * scale, u + 1, v);
+      out[u + 1] = to_dn(c1 + noise_sigma(c1) * n.second);
+    }
+  }
 }
 
 }  // namespace mrvs::sim

@@ -314,9 +314,8 @@ Status StereoRenderer::to_image(int cam, const FrameInfo& frame, const std::vect
   image->create(h, w, CV_8UC1);
 #pragma omp parallel for schedule(dynamic, 8)
   for (int v = 0; v < h; ++v) {
-    std::uint8_t* row = image->ptr<std::uint8_t>(v);
-    const float* rad = radiance.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(w);
-    for (int u = 0; u < w; ++u) row[u] = photometry.dn(rad[u] * scale, u, v);
+    photometry.dn_row(radiance.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(w), scale, v,
+                      w, image->ptr<std::uint8_t>(v));
   }
   return absl::OkStatus();
 }

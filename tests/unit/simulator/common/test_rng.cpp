@@ -50,6 +50,22 @@ TEST(CounterRng, NormalHasZeroMeanUnitVarianceAndGaussianTails) {
   EXPECT_NEAR(beyond2 / double(kN), 0.0455, 0.003);  // P(|x| > 2)
 }
 
+TEST(CounterRng, NormalPairsAreTwoIndependentStandardNormals) {
+  const CounterRng rng(11, Stream::kImageNoise);
+  double s1 = 0, s2 = 0, q1 = 0, q2 = 0, x12 = 0, x12sq = 0;
+  for (int i = 0; i < kN; ++i) {
+    const auto [a, b] = rng.normal_pair(i, 2);
+    ASSERT_EQ(a, rng.normal(i, 2));  // the first is normal()
+    s1 += a, s2 += b, q1 += a * a, q2 += b * b, x12 += a * b, x12sq += a * a * b * b;
+  }
+  EXPECT_NEAR(s2 / kN, 0.0, 4 / std::sqrt(kN));
+  EXPECT_NEAR(q1 / kN, 1.0, 0.01);
+  EXPECT_NEAR(q2 / kN, 1.0, 0.01);
+  EXPECT_LT(std::abs(x12 / kN), 4 / std::sqrt(kN));
+  // Independent, not merely uncorrelated: E[a^2 b^2] = E[a^2] E[b^2] = 1.
+  EXPECT_NEAR(x12sq / kN, 1.0, 0.03);
+}
+
 TEST(CounterRng, IsAPureFunctionOfSeedStreamAndIndex) {
   const CounterRng a(42, Stream::kMapNoise);
   const CounterRng b(42, Stream::kMapNoise);

@@ -141,5 +141,41 @@ TEST(PixelPhotometry, NoiseModelStatistics) {
   EXPECT_EQ(p.noise(clean, 10, 10), PixelPhotometry(options, cam, 0, 4, 1.0, 99).noise(clean, 10, 10));
 }
 
+TEST(PixelPhotometry, RowsEqualThePixelMappingAndNeighboursAreUncorrelated) {
+  const StatusOr<config::StereoRigCalibration> rig = test::euroc_rig();
+  ASSERT_TRUE(rig.ok()) << rig.status();
+  const camera::CameraModel& cam = *rig->cameras[0].model;
+  RenderOptions options;
+  options.read_noise_sigma = 3.0;
+  options.shot_noise = true;
+  options.vignetting = -0.2;
+  const PixelPhotometry p(options, cam, 0, 7, 1.05, 5, 2.0);
+  const int w = cam.width();
+  std::vector<float> radiance(static_cast<std::size_t>(w));
+  for (int u = 0; u < w; ++u) radiance[static_cast<std::size_t>(u)] = 0.1f + 0.8f * static_cast<float>(u) / w;
+  std::vector<std::uint8_t> row(static_cast<std::size_t>(w));
+  // Odd widths too: the last pixel's pair has no partner.
+  for (const int width : {w, w - 1}) {
+    for (const int v : {0, 17, cam.height() - 1}) {
+      p.dn_row(radiance.data(), 0.9f, v, width, row.data());
+      for (int u = 0; u < width; ++u) {
+        ASSERT_EQ(row[static_cast<std::size_t>(u)], p.dn(radiance[static_cast<std::size_t>(u)] * 0.9f, u, v))
+            << "u " << u << " v " << v << " width " << width;
+      }
+    }
+  }
+  // The two pixels of a pair (both Box-Muller outputs) and pairs side by side: no correlation.
+  double s_pair = 0, s_next = 0, s_xx = 0;
+  int n = 0;
+  for (int v = 0; v < cam.height(); ++v) {
+    for (int u = 0; u + 2 < w; u += 2) {
+      const double a = p.noise(100.0, u, v), b = p.noise(100.0, u + 1, v), c = p.noise(100.0, u + 2, v);
+      s_pair += a * b, s_next += b * c, s_xx += a * a, ++n;
+    }
+  }
+  EXPECT_LT(std::abs(s_pair / s_xx), 4.0 / std::sqrt(n));
+  EXPECT_LT(std::abs(s_next / s_xx), 4.0 / std::sqrt(n));
+}
+
 }  // namespace
 }  // namespace mrvs::sim

@@ -8,6 +8,7 @@
 // standard libraries.
 #include <cmath>
 #include <cstdint>
+#include <utility>
 
 #include "mrvs/core/hash.h"
 
@@ -62,6 +63,16 @@ class CounterRng {
     const double u1 = (static_cast<double>(h >> 11) + 0.5) * 0x1.0p-53;  // (0, 1)
     const double u2 = static_cast<double>(mix64(h) >> 11) * 0x1.0p-53;   // [0, 1)
     return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+  }
+
+  /// Two independent standard normals for the tuple (both Box-Muller outputs, for the cost
+  /// of one): first == normal(a, b, c).
+  std::pair<double, double> normal_pair(std::uint64_t a, std::uint64_t b = 0, std::uint64_t c = 0) const {
+    const std::uint64_t h = bits(a, b, c);
+    const double u1 = (static_cast<double>(h >> 11) + 0.5) * 0x1.0p-53;
+    const double u2 = static_cast<double>(mix64(h) >> 11) * 0x1.0p-53;
+    const double r = std::sqrt(-2.0 * std::log(u1)), theta = 6.283185307179586 * u2;
+    return {r * std::cos(theta), r * std::sin(theta)};
   }
 
  private:

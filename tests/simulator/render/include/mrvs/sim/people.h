@@ -34,7 +34,7 @@ struct Walker {
 
 /// One person at one instant, in floats for the pixel loops.
 struct PersonBox {
-  Eigen::Matrix3f R_p_w = Eigen::Matrix3f::Identity();  ///< world -> person
+  Eigen::Matrix3f R_p_w = Eigen::Matrix3f::Identity();  ///< world -> person; a turn about z (upright)
   Eigen::Vector3f centre_w = Eigen::Vector3f::Zero();
   Eigen::Vector3f half = Eigen::Vector3f::Ones();  ///< half sizes along the person's x, y, z
   std::uint64_t texture_seed = 0;

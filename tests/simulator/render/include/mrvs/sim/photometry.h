@@ -85,9 +85,12 @@ class PixelPhotometry {
   /// Standard deviation of the pixel noise for a clean signal (DN): sqrt(A^2 sigma_r^2 + A max(S, 0) / K).
   double noise_sigma(double clean) const;
   /// The noise draw n of pixel (u, v) for clean signal `clean`, DN (0 when noise is off).
+  /// Pixels 2j and 2j+1 of a row share one Box-Muller draw (its two independent outputs).
   double noise(double clean, int u, int v) const;
   /// Final 8-bit value of pixel (u, v) for `radiance`.
   std::uint8_t dn(double radiance, int u, int v) const;
+  /// Row v: out[u] = dn(radiance[u] * scale, u, v) for u in [0, width), one draw per pixel pair.
+  void dn_row(const float* radiance, float scale, int v, int width, std::uint8_t* out) const;
   /// True when read or shot noise is on.
   bool has_noise() const { return has_noise_; }
 
@@ -102,7 +105,7 @@ class PixelPhotometry {
   CounterRng rng_;
   std::uint64_t cam_;
   std::uint64_t frame_;
-  std::uint64_t width_;
+  std::uint64_t pairs_per_row_;  ///< ceil(width / 2)
 };
 
 }  // namespace mrvs::sim
