@@ -421,7 +421,8 @@ bool process(const Args& a, const mrvs::io::DatasetReader& reader, mrvs::edge::V
     if (a.realtime) {
       std::this_thread::sleep_until(t0 + std::chrono::nanoseconds(f.t_ns - frames.front().t_ns));
     }
-    if (auto s = feed_sensors_until(vio, reader, &next_imu, &next_gnss, f.t_ns + td, outage); !s.ok()) {
+    if (auto s = feed_sensors_until(vio, reader, &next_imu, &next_gnss, vio.imu_time(f.t_ns), outage);
+        !s.ok()) {
       fmt::print(stderr, "edge_client: error: {}\n", std::string(s.message()));
       return false;
     }

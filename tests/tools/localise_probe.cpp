@@ -230,7 +230,7 @@ int run(const Args& a) {
     const auto& f = frames[k];
     while (next_imu < imu.size()) {
       if (!vio->feed_imu(imu[next_imu]).ok()) break;
-      if (imu[next_imu++].t_ns >= f.t_ns + td) break;
+      if (imu[next_imu++].t_ns >= vio->imu_time(f.t_ns)) break;
     }
     for (; next_gnss < gnss.size() && gnss[next_gnss].t_ns <= f.t_ns + td; ++next_gnss) {
       vio->feed_gnss(gnss[next_gnss], (*data)->T_b_gnss().value_or(SE3d()));

@@ -88,8 +88,12 @@ std::optional<SE3d> VioEstimator::predict_T_c_cprev(TimestampNs t_cam_ns) const 
   return T_w_c_now.inverse() * T_w_c_prev;
 }
 
+TimestampNs VioEstimator::imu_time(TimestampNs t_cam_ns) const {
+  return t_cam_ns + (state_ ? from_seconds(state_->time_offset_s) : rig_.cameras[0].time_offset_ns);
+}
+
 StatusOr<FrameOutput> VioEstimator::feed_frame(const FeatureFrame& frame) {
-  if (!imu_.empty() && imu_.back().t_ns < frame.t_ns + rig_.cameras[0].time_offset_ns) {
+  if (!imu_.empty() && imu_.back().t_ns < imu_time(frame.t_ns)) {
     return absl::OutOfRangeError(
         fmt::format("IMU data ends at {} ns, before the frame at {} ns", imu_.back().t_ns, frame.t_ns));
   }

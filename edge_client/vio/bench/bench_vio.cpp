@@ -74,7 +74,7 @@ void BM_EdgeFrame(benchmark::State& state) {
     for (std::size_t k = 0; k < frames.size(); ++k) {
       while (next < imu.size()) {
         (void)vio->feed_imu(imu[next]);
-        if (imu[next++].t_ns >= frames[k].t_ns) break;
+        if (imu[next++].t_ns >= vio->imu_time(frames[k].t_ns)) break;
       }
       auto out = vio->feed_stereo(frames[k].t_ns, c.images[k][0], c.images[k][1]);
       if (!out.ok() || !out->estimate.initialized) continue;

@@ -110,6 +110,10 @@ class VioEstimator {
   /// data after the gap); other errors are the filter's (the frame is skipped, the state
   /// kept).
   StatusOr<FrameOutput> feed_frame(const FeatureFrame& frame);
+  /// The IMU-clock time of camera stamp t_cam_ns, t_cam + t_d, with t_d the filter's estimate
+  /// while it runs (it moves under estimator.state.calib_time_offset) and the calibration's
+  /// before: feed the IMU through the first sample at or after it before the frame.
+  TimestampNs imu_time(TimestampNs t_cam_ns) const;
 
   /// The motion of cam0 from the previous frame to a frame at `t_cam_ns` predicted by the
   /// IMU (for the tracker's KLT prior); nullopt before initialisation or without IMU.

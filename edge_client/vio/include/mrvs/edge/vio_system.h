@@ -61,8 +61,10 @@ class VioSystem {
   /// A GNSS fix (the localisation's prior region only; VioEstimator::feed_gnss).
   void feed_gnss(const io::GnssFix& fix, const SE3d& T_b_antenna) { estimator_.feed_gnss(fix, T_b_antenna); }
   /// One stereo pair (cam0, cam1; CV_8UC1 of the calibrated sizes) taken at t_ns (camera
-  /// clock). The IMU must cover t_ns (VioEstimator::feed_frame).
+  /// clock). The IMU must cover imu_time(t_ns) (VioEstimator::feed_frame).
   StatusOr<StereoOutput> feed_stereo(TimestampNs t_ns, const cv::Mat& left, const cv::Mat& right);
+  /// Camera stamp -> IMU clock at the current time-offset estimate (VioEstimator::imu_time).
+  TimestampNs imu_time(TimestampNs t_cam_ns) const { return estimator_.imu_time(t_cam_ns); }
 
   /// The cloud map (not owned; nullptr: plain VIO).
   void set_map_service(MapService* service) { estimator_.set_map_service(service); }
