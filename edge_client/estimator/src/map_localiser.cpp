@@ -207,22 +207,33 @@ std::optional<localisation::Request> MapLocaliser::build_request(TimestampNs t_n
   const DurationNs bucket = std::max<DurationNs>(1, from_seconds(options_.viewpoint_interval_s));
   // One point per cell (the mean of what fell in it), seen from its first point's viewpoint:
   // one per viewpoint_interval_s of the window.
+  // A cell of dense points is kept only when min_dense_pairs stereo pairs put points in it:
+  // a walking person or a passing car leaves its points in cells no other pair sees.
   struct Cell {
     Vec3d sum = Vec3d::Zero();
     int count = 0;
     std::int64_t view = 0;
     double brightness_sum = 0.0;  ///< over the points with a brightness
     int brightness_count = 0;
+    int pairs = 0;  ///< dense pairs with points here (tracks count as enough)
+    const void* last_pair = nullptr;
   };
   std::unordered_map<std::uint64_t, Cell> cells;
   std::vector<std::uint64_t> order;
   std::map<std::int64_t, Vec3d> views;
-  auto add = [&](const Seen& seen, const Vec3d& p, float brightness) {
+  // `pair`: the dense pair the point came from (nullptr: a track, multi-view already).
+  auto add = [&](const Seen& seen, const Vec3d& p, float brightness, const void* pair) {
     if (seen.t_ns < from || !p.allFinite() || (p - anchor_o).norm() > options_.max_range_m) return;
     const std::int64_t view = (seen.t_ns - from) / bucket;
     views.try_emplace(view, seen.viewpoint_o);
     auto [it, fresh] = cells.try_emplace(cell_key(p, options_.voxel_m), Cell{Vec3d::Zero(), 0, view});
     if (fresh) order.push_back(it->first);
+    if (pair == nullptr) {
+      it->second.pairs = options_.min_dense_pairs;
+    } else if (pair != it->second.last_pair) {
+      ++it->second.pairs;
+      it->second.last_pair = pair;
+    }
     it->second.sum += p;
     ++it->second.count;
     if (brightness > 0.0f) {
@@ -232,9 +243,13 @@ std::optional<localisation::Request> MapLocaliser::build_request(TimestampNs t_n
   };
   for (const DensePoints& d : dense_) {
     for (std::size_t i = 0; i < d.points.size(); ++i)
-      add(d.seen, d.points[i], d.brightness.empty() ? 0.0f : d.brightness[i]);
+      add(d.seen, d.points[i], d.brightness.empty() ? 0.0f : d.brightness[i], &d);
   }
-  for (const auto& [id, t] : tracks_) add(t.seen, t.p, t.brightness);
+  for (const auto& [id, t] : tracks_) add(t.seen, t.p, t.brightness, nullptr);
+  order.erase(
+      std::remove_if(order.begin(), order.end(),
+                     [&](std::uint64_t key) { return cells.at(key).pairs < options_.min_dense_pairs; }),
+      order.end());
   if (static_cast<int>(order.size()) < options_.min_points) return std::nullopt;
   // At most max_points, evenly spread, then grouped by viewpoint (the wire's order).
   const std::size_t n = order.size();

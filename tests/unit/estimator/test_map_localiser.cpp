@@ -67,6 +67,7 @@ LocalisationOptions options() {
   o.interval_s = 1.0;
   o.min_points = 20;
   o.voxel_m = 0.05;
+  o.min_dense_pairs = 1;  // the walls of these tests slide along with the camera
   return o;
 }
 
@@ -339,6 +340,38 @@ TEST(MapLocaliser, BestGuessesNeverLocaliseAloneNorConfirmAWrongPoseOrAStoppedSe
     EXPECT_EQ(cloud.sent.size(), 2u);
     EXPECT_TRUE(cloud.script.empty());  // both answered
   }
+}
+
+// What walks through the view is left out of the submap: a cell of dense points needs points
+// from min_dense_pairs stereo pairs, and a person moving 1.3 m/s between pairs 0.25 s apart
+// never puts two pairs' points in one 5 cm cell, while a wall does.
+TEST(MapLocaliser, PointsOfAMovingPersonAreLeftOutOfTheSubmap) {
+  LocalisationOptions o = options();
+  o.min_dense_pairs = 2;
+  MapLocaliser loc(o);
+  for (int k = 0; k < 4; ++k) {
+    const TimestampNs t = k * kSecond / 4;
+    std::vector<Vec3d> pts;
+    for (int i = 0; i < 40; ++i) pts.emplace_back(3.0, 0.05 * i + 0.01, 0.02);      // the wall, still
+    for (int i = 0; i < 10; ++i) pts.emplace_back(1.5, 0.33 * k, 0.05 * i + 0.01);  // a person, walking
+    loc.add_points(t, pts, Vec3d::Zero());
+  }
+  const auto q = loc.build_request(kSecond, Vec3d::Zero());
+  ASSERT_TRUE(q.has_value());
+  ASSERT_EQ(q->points.size(), 40u);
+  for (const auto& p : q->points) EXPECT_NEAR(p.x(), 3.0f, 0.03f) << "a person's point was sent";
+  // With min_dense_pairs 1 the person is in it.
+  o.min_dense_pairs = 1;
+  MapLocaliser all(o);
+  for (int k = 0; k < 4; ++k) {
+    std::vector<Vec3d> pts;
+    for (int i = 0; i < 40; ++i) pts.emplace_back(3.0, 0.05 * i + 0.01, 0.02);
+    for (int i = 0; i < 10; ++i) pts.emplace_back(1.5, 0.33 * k, 0.05 * i + 0.01);
+    all.add_points(k * kSecond / 4, pts, Vec3d::Zero());
+  }
+  const auto with_person = all.build_request(kSecond, Vec3d::Zero());
+  ASSERT_TRUE(with_person.has_value());
+  EXPECT_EQ(with_person->points.size(), 80u);
 }
 
 TEST(MapLocaliser, WithoutTheServiceItWaitsAndSaysSo) {

@@ -63,6 +63,7 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
   double agree_floor_m = 0.05;         ///< agreement: covariance plus this, m
   double agree_floor_deg = 0.5;        ///< ... and this, deg
   double dense_interval_s = 0.25;      ///< dense_stereo: one stereo pair per this, s
+  int min_dense_pairs = 1;             ///< a cell of dense points only when this many pairs put points in it
   double viewpoint_interval_s = 0.25;  ///< points seen within this share one viewpoint, s
   double gnss_sigmas = 3.0;            ///< prior region: this many GNSS sigmas ...
   double gnss_margin_m = 2.0;          ///< ... plus the antenna lever arm plus this, m
@@ -96,6 +97,8 @@ struct LocalisationOptions : config::OptionsEquality<LocalisationOptions> {
     v("agree_floor_m", agree_floor_m, in_range(0.0, 100.0), "agreement floor, m");
     v("agree_floor_deg", agree_floor_deg, in_range(0.0, 180.0), "agreement floor, deg");
     v("dense_interval_s", dense_interval_s, in_range(0.01, 100.0), "dense stereo: time between pairs, s");
+    v("min_dense_pairs", min_dense_pairs, in_range(1, 100),
+      "a submap cell of dense stereo points needs points from this many pairs (what moves stays in none)");
     v("viewpoint_interval_s", viewpoint_interval_s, in_range(0.01, 100.0),
       "points seen within this share one viewpoint (<= 64 per request), s");
     v("gnss_sigmas", gnss_sigmas, in_range(0.0, 100.0), "prior radius in GNSS sigmas");
