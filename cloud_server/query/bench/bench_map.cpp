@@ -70,7 +70,7 @@ sim::GeneratorRequest indoor_request() {
   r.trajectory = mrvs::test::euroc_groundtruth_file("V1_01_easy.txt");
   r.preset = "easy";
   r.options = sim::default_options(sim::SceneProfile::kIndoor);
-  (void)sim::apply_preset("easy", r.options);
+  (void)sim::apply_preset("easy", r.profile, r.options);
   r.options.trajectory.window_start_s = 20.0;
   r.options.trajectory.window_duration_s = env_or("MRVS_BENCH_WINDOW_S", 2.0);
   r.options.map.spacing_near_m = env_or("MRVS_BENCH_SPACING_M", 0.015);

@@ -15,7 +15,7 @@
 // the options the edge client ships with), dense stereo with its `dense_stereo` section (the
 // defaults when there is none), plus the overrides in MRVS_BENCH_SET (space-separated, e.g.
 // "tracker.klt_iterations=15 tracker.klt_window=9" or "dense_stereo.matcher=sgbm").
-// Environment: MRVS_BENCH_PRESET (easy | realistic, default easy), MRVS_BENCH_CONFIG, MRVS_BENCH_SET.
+// Environment: MRVS_BENCH_PRESET (easy | realistic | hard, default easy), MRVS_BENCH_CONFIG, MRVS_BENCH_SET.
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -84,7 +84,8 @@ Bench build_bench() {
   const char* preset = std::getenv("MRVS_BENCH_PRESET");
   r.preset = preset != nullptr ? preset : "easy";
   r.options = sim::default_options(r.profile);
-  if (Status s = sim::apply_preset(r.preset, r.options); !s.ok()) return failed(std::string(s.message()));
+  if (Status s = sim::apply_preset(r.preset, r.profile, r.options); !s.ok())
+    return failed(std::string(s.message()));
   r.options.trajectory.window_start_s = 20.0;
   r.options.trajectory.window_duration_s = 3.05;
   r.options.map.spacing_near_m = r.options.map.spacing_far_m = 0.2;

@@ -43,7 +43,9 @@ void add_options(CLI::App& app, Args& a) {
   app.add_option("--profile", a.profile, "indoor (EuRoC rig, Vicon-like room) | outdoor (KAIST-like car rig)")
       ->capture_default_str()
       ->check(CLI::IsMember({"indoor", "outdoor"}));
-  app.add_option("--preset", a.preset, "easy (realism knobs off) | realistic (noise, exposure, map changes)")
+  app.add_option("--preset", a.preset,
+                 "easy (realism knobs off) | realistic (noise, exposure, map changes) | hard (realistic plus "
+                 "blur, auto-exposure, a dim area, people, calibration error, scanner survey indoors)")
       ->capture_default_str()
       ->check(CLI::IsMember(mrvs::sim::preset_names()));
   app.add_option("--out", a.out, "Sequence folder to create (it will contain mav0/ and sim0/)")->required();
@@ -71,7 +73,7 @@ void add_options(CLI::App& app, Args& a) {
 /// Profile defaults, then the preset, the --config file, the shorthand flags and --set.
 mrvs::StatusOr<mrvs::sim::SimulatorOptions> resolve_options(const Args& a, mrvs::sim::SceneProfile profile) {
   mrvs::sim::SimulatorOptions options = mrvs::sim::default_options(profile);
-  MRVS_RETURN_IF_ERROR(mrvs::sim::apply_preset(a.preset, options));
+  MRVS_RETURN_IF_ERROR(mrvs::sim::apply_preset(a.preset, profile, options));
   std::vector<std::string> overrides;
   if (a.seed >= 0) overrides.push_back(fmt::format("seed={}", a.seed));
   if (a.start_s >= 0) overrides.push_back(fmt::format("trajectory.window_start_s={}", a.start_s));

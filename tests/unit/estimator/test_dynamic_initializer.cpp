@@ -49,7 +49,7 @@ const sim::World& world(const WorldKey& key) {
   r.profile = sim::SceneProfile::kIndoor;
   r.preset = "easy";
   r.options = sim::default_options(r.profile);
-  EXPECT_TRUE(sim::apply_preset(r.preset, r.options).ok());
+  EXPECT_TRUE(sim::apply_preset(r.preset, r.profile, r.options).ok());
   r.trajectory = mrvs::test::euroc_groundtruth_file("V1_01_easy.txt");
   r.options.trajectory.window_start_s = key.static_prefix_s > 0.0 ? 0.0 : 20.0;  // V1_01 moves at 20 s
   r.options.trajectory.static_prefix_s = key.static_prefix_s;

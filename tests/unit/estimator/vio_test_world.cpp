@@ -103,7 +103,7 @@ std::unique_ptr<SyntheticSequence> build(const SyntheticOptions& o) {
   r.trajectory = mrvs::test::euroc_groundtruth_file(o.trajectory);
   r.preset = o.preset;
   r.options = sim::default_options(sim::SceneProfile::kIndoor);
-  EXPECT_TRUE(sim::apply_preset(o.preset, r.options).ok());
+  EXPECT_TRUE(sim::apply_preset(o.preset, sim::SceneProfile::kIndoor, r.options).ok());
   r.options.trajectory.window_start_s = o.start_s;
   r.options.trajectory.window_duration_s = o.duration_s;
   r.options.map.spacing_near_m = r.options.map.spacing_far_m = o.map_spacing_m;

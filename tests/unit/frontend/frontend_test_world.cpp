@@ -22,7 +22,7 @@ std::unique_ptr<TestSequence> build(sim::SceneProfile profile, const std::string
   r.profile = profile;
   r.preset = preset;
   r.options = sim::default_options(profile);
-  EXPECT_TRUE(sim::apply_preset(preset, r.options).ok());
+  EXPECT_TRUE(sim::apply_preset(preset, profile, r.options).ok());
   const double rate = profile == sim::SceneProfile::kIndoor ? 20.0 : 10.0;
   if (profile == sim::SceneProfile::kIndoor) {
     r.trajectory = mrvs::test::euroc_groundtruth_file("V1_01_easy.txt");

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <unordered_map>
@@ -18,9 +20,12 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include "mrvs/config/calibration.h"
 #include "mrvs/core/stats.h"
 #include "mrvs/edge/dense_stereo.h"
+#include "mrvs/eval/trajectory_eval.h"
 #include "mrvs/io/dataset.h"
+#include "mrvs/sim/calibration_error.h"
 #include "mrvs/sim/map_io.h"
 #include "mrvs/test/generated_sequence.h"
 
@@ -79,24 +84,38 @@ Status load(Sequence* s, int frames, int stride) {
   sim::GeneratorRequest request =
       mrvs::test::indoor_sequence_request("V1_01_easy.txt", 40.0, 8.0, "realistic");
   sim::SimulatorOptions dense = sim::default_options(sim::SceneProfile::kIndoor);
-  MRVS_RETURN_IF_ERROR(sim::apply_preset("realistic", dense));
-  request.options.map = dense.map;  // the survey at the simulator's own density (1 cm near, 2 cm far)
+  MRVS_RETURN_IF_ERROR(sim::apply_preset("realistic", sim::SceneProfile::kIndoor, dense));
+  request.options.map = dense.map;  // the survey at the simulator's own density
+  // The matcher against the map: nobody walking through the view (people are not in the map;
+  // the localiser's submap leaves them out, test_map_localiser.cpp).
+  request.options.people.count = 0;
   MRVS_ASSIGN_OR_RETURN(const std::filesystem::path dir,
                         mrvs::test::generated_sequence("dense_stereo_v101_40s_8s_realistic", request));
   io::DatasetOptions options;
   options.path = dir;
   MRVS_ASSIGN_OR_RETURN(std::unique_ptr<io::DatasetReader> reader, io::open_euroc_dataset(options));
+  // The matcher is under test, not the calibration: the rig that rendered the images and
+  // the ground truth at their true capture time (the preset's calibration error is undone).
   s->rig = reader->calibration();
+  const std::filesystem::path truth = dir / "sim0/true_calibration";
+  for (int c = 0; c < 2; ++c) {
+    MRVS_ASSIGN_OR_RETURN(s->rig.cameras[static_cast<std::size_t>(c)],
+                          config::load_euroc_camera_yaml(truth / fmt::format("cam{}/sensor.yaml", c)));
+  }
+  MRVS_ASSIGN_OR_RETURN(const double td_ms, sim::read_true_time_offset_ms(truth));
   const auto& gt = reader->groundtruth();
   for (int k = 0; k < frames && k < static_cast<int>(reader->stereo_frames().size()); k += stride) {
     const io::StereoFrame& f = reader->stereo_frames()[static_cast<std::size_t>(k)];
-    const auto it = std::lower_bound(gt.begin(), gt.end(), f.t_ns,
-                                     [](const io::GroundTruthState& g, TimestampNs t) { return g.t_ns < t; });
-    if (it == gt.end() || it->t_ns != f.t_ns) return absl::NotFoundError("no ground truth at a camera stamp");
+    const TimestampNs t = f.t_ns + static_cast<TimestampNs>(std::llround(td_ms * 1e6));
+    const auto it = std::lower_bound(gt.begin(), gt.end(), t,
+                                     [](const io::GroundTruthState& g, TimestampNs x) { return g.t_ns < x; });
+    if (it == gt.begin() || it == gt.end()) return absl::NotFoundError("no ground truth around a frame");
+    const auto before = std::prev(it);
+    const double alpha = static_cast<double>(t - before->t_ns) / static_cast<double>(it->t_ns - before->t_ns);
     MRVS_ASSIGN_OR_RETURN(cv::Mat left, reader->load_image(0, f.left));
     MRVS_ASSIGN_OR_RETURN(cv::Mat right, reader->load_image(1, f.right));
     s->images.push_back({left, right});
-    s->T_w_c0.push_back(it->T_w_b * s->rig.cameras[0].T_b_c);
+    s->T_w_c0.push_back(eval::interpolate_pose(before->T_w_b, it->T_w_b, alpha) * s->rig.cameras[0].T_b_c);
   }
   MRVS_ASSIGN_OR_RETURN(const std::vector<sim::MapPoint> map,
                         sim::read_ply_xyzi(dir / "mav0/pointcloud0/data.ply"));

@@ -25,7 +25,7 @@ class FrontendReplayTool : public testing::Test {
     r.trajectory = mrvs::test::euroc_groundtruth_file("V1_01_easy.txt");
     r.out = *dir_ / "seq";
     r.options = sim::default_options(sim::SceneProfile::kIndoor);
-    ASSERT_TRUE(sim::apply_preset("easy", r.options).ok());
+    ASSERT_TRUE(sim::apply_preset("easy", sim::SceneProfile::kIndoor, r.options).ok());
     r.options.trajectory.window_start_s = 20.0;
     r.options.trajectory.window_duration_s = 1.0;
     r.options.map.spacing_near_m = r.options.map.spacing_far_m = 0.2;

@@ -40,7 +40,7 @@ const MappedClip& clip() {
     sim::GeneratorRequest request =
         mrvs::test::indoor_sequence_request("V1_01_easy.txt", 0.0, 24.0, "realistic");
     sim::SimulatorOptions dense = sim::default_options(sim::SceneProfile::kIndoor);
-    EXPECT_TRUE(sim::apply_preset("realistic", dense).ok());
+    EXPECT_TRUE(sim::apply_preset("realistic", sim::SceneProfile::kIndoor, dense).ok());
     request.options.map = dense.map;
     auto p = mrvs::test::generated_sequence("vio_v101_24s_realistic_mapped", request);
     EXPECT_TRUE(p.ok()) << p.status();

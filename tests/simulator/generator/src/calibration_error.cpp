@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <Eigen/SVD>
 
 #include "mrvs/config/yaml_document.h"
 #include "mrvs/core/file.h"
@@ -45,6 +46,36 @@ void perturb_intrinsics(const CounterRng& rng, int cam, const CalibrationErrorOp
   }
 }
 
+/// The rotation R_w_t (true camera -> written camera) that best maps the true camera's ray of
+/// each pixel of a 16 x 10 grid onto the written camera's ray of the same pixel (Kabsch):
+/// the share of an intrinsic error that a calibration moves into the camera's orientation
+/// (target reprojections pin the rays, not the parameters one by one). Identity when either
+/// camera cannot be built.
+Mat3d compensating_rotation(const RigCamera& written, const camera::Params& true_params) {
+  auto w = camera::make_camera(written.model, written.width, written.height, written.params);
+  auto t = camera::make_camera(written.model, written.width, written.height, true_params);
+  if (!w.ok() || !t.ok()) return Mat3d::Identity();
+  constexpr int kU = 16, kV = 10;
+  Mat3d H = Mat3d::Zero();
+  for (int j = 0; j < kV; ++j) {
+    for (int i = 0; i < kU; ++i) {
+      const Vec2d uv((i + 0.5) * written.width / kU, (j + 0.5) * written.height / kV);
+      const StatusOr<Vec3d> a = (*w)->unproject(uv), b = (*t)->unproject(uv);
+      if (a.ok() && b.ok()) H += *b * a->transpose();
+    }
+  }
+  const Eigen::JacobiSVD<Mat3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3d D = Mat3d::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  return svd.matrixV() * D * svd.matrixU().transpose();
+}
+
+Mat4d rotated(const Mat4d& T, const Mat3d& R) {
+  Mat4d out = T;
+  out.topLeftCorner<3, 3>() = T.topLeftCorner<3, 3>() * R;
+  return out;
+}
+
 }  // namespace
 
 TrueCalibration draw_true_calibration(const Rig& written, double time_offset_ms,
@@ -59,9 +90,16 @@ TrueCalibration draw_true_calibration(const Rig& written, double time_offset_ms,
                 draw3(rng, kStereoTranslation, 1e-3 * o.stereo_translation_mm));
   const Mat4d T_b_c0_true = perturbed(T_b_c0, draw3(rng, kRotation, o.rotation_deg * kDegToRad),
                                       draw3(rng, kTranslation, 1e-3 * o.translation_mm));
-  truth.rig.cameras[0].T_BS = T_b_c0_true;
-  truth.rig.cameras[1].T_BS = T_b_c0_true * T_c0_c1_true;
-  for (int c = 0; c < 2; ++c) perturb_intrinsics(rng, c, o, truth.rig.cameras[c].params);
+  for (int c = 0; c < 2; ++c) {
+    RigCamera& cam = truth.rig.cameras[static_cast<std::size_t>(c)];
+    perturb_intrinsics(rng, c, o, cam.params);
+    truth.R_compensation[static_cast<std::size_t>(c)] =
+        o.compensate_intrinsics
+            ? compensating_rotation(written.cameras[static_cast<std::size_t>(c)], cam.params)
+            : Mat3d::Identity();
+  }
+  truth.rig.cameras[0].T_BS = rotated(T_b_c0_true, truth.R_compensation[0]);
+  truth.rig.cameras[1].T_BS = rotated(T_b_c0_true * T_c0_c1_true, truth.R_compensation[1]);
   truth.time_offset_ms += o.time_offset_ms * rng.normal(kTime);
   return truth;
 }

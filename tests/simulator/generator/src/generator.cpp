@@ -414,7 +414,7 @@ StatusOr<GeneratorRequest> load_generator_request(const fs::path& sequence) {
         fmt::format("{} was made from {}, which no longer exists", sequence.string(), r.trajectory.string()));
   }
   r.options = default_options(r.profile);
-  MRVS_RETURN_IF_ERROR(apply_preset(r.preset, r.options));
+  MRVS_RETURN_IF_ERROR(apply_preset(r.preset, r.profile, r.options));
   MRVS_ASSIGN_OR_RETURN(const config::YamlDocument options, config::load_yaml_file(sim0 / "config.yaml"));
   MRVS_RETURN_IF_ERROR(config::update_options(options, "", r.options));
   return r;

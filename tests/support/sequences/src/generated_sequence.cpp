@@ -13,9 +13,11 @@ sim::GeneratorRequest indoor_sequence_request(const std::string& trajectory_file
   r.trajectory = euroc_groundtruth_file(trajectory_file);
   r.preset = preset;
   r.options = sim::default_options(r.profile);
-  (void)sim::apply_preset(preset, r.options);
+  (void)sim::apply_preset(preset, r.profile, r.options);
   r.options.trajectory.window_start_s = start_s;
   r.options.trajectory.window_duration_s = duration_s;
+  // A thin surface survey: the unit tests that need the shipped survey copy its map options.
+  r.options.map.model = sim::MapModel::kSurface;
   r.options.map.spacing_near_m = r.options.map.spacing_far_m = 0.2;
   return r;
 }

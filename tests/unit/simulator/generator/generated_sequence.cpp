@@ -18,7 +18,7 @@ GeneratorRequest indoor_request(const std::filesystem::path& out, double duratio
   r.out = out;
   r.preset = "easy";
   r.options = default_options(SceneProfile::kIndoor);
-  EXPECT_TRUE(apply_preset("easy", r.options).ok());
+  EXPECT_TRUE(apply_preset("easy", r.profile, r.options).ok());
   auto doc = config::load_yaml_file(MRVS_INDOOR_FIXTURE_YAML);
   EXPECT_TRUE(doc.ok()) << doc.status();
   if (doc.ok()) {
@@ -47,7 +47,7 @@ GeneratorRequest outdoor_gnss_request(const std::filesystem::path& out) {
   r.out = out;
   r.preset = "easy";
   r.options = default_options(SceneProfile::kOutdoor);
-  EXPECT_TRUE(apply_preset("easy", r.options).ok());
+  EXPECT_TRUE(apply_preset("easy", r.profile, r.options).ok());
   auto doc = config::load_yaml_file(MRVS_OUTDOOR_GNSS_FIXTURE_YAML);
   EXPECT_TRUE(doc.ok()) << doc.status();
   if (doc.ok()) {

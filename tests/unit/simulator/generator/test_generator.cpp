@@ -569,15 +569,34 @@ TEST(GeneratorOutdoor, WritesAKaistLikeSequenceTheReaderTakes) {
 TEST(GeneratorOptions, PresetsAndProfilesDiffer) {
   SimulatorOptions easy = default_options(SceneProfile::kIndoor);
   SimulatorOptions realistic = easy;
-  ASSERT_TRUE(apply_preset("easy", easy).ok());
-  ASSERT_TRUE(apply_preset("realistic", realistic).ok());
+  ASSERT_TRUE(apply_preset("easy", SceneProfile::kIndoor, easy).ok());
+  ASSERT_TRUE(apply_preset("realistic", SceneProfile::kIndoor, realistic).ok());
   EXPECT_FALSE(easy == realistic);
   EXPECT_GT(realistic.render.read_noise_sigma, 0.0);
   EXPECT_TRUE(realistic.render.exposure_walk);
   EXPECT_GT(realistic.map.holes_fraction, 0.0);
-  const Status bad = apply_preset("hard", easy);
+  // Issue 31's knobs: on in hard, off in easy and realistic; the scanner survey indoors only.
+  SimulatorOptions hard = default_options(SceneProfile::kIndoor);
+  ASSERT_TRUE(apply_preset("hard", SceneProfile::kIndoor, hard).ok());
+  for (const SimulatorOptions* o : {&easy, &realistic, &hard}) {
+    const bool on = o == &hard;
+    EXPECT_EQ(o->render.motion_blur, on);
+    EXPECT_EQ(o->render.auto_exposure, on);
+    EXPECT_EQ(o->render.dim_area, on);
+    EXPECT_EQ(o->calib_error.enabled, on);
+    EXPECT_EQ(o->people.count > 0, on);
+    EXPECT_EQ(o->map.model == MapModel::kScanner, on);
+  }
+  // hard is realistic plus those: the realistic knobs are all there.
+  EXPECT_EQ(hard.render.read_noise_sigma, realistic.render.read_noise_sigma);
+  EXPECT_EQ(hard.map.holes_fraction, realistic.map.holes_fraction);
+  SimulatorOptions street = default_options(SceneProfile::kOutdoor);
+  ASSERT_TRUE(apply_preset("hard", SceneProfile::kOutdoor, street).ok());
+  EXPECT_EQ(street.map.model, MapModel::kSurface);
+  EXPECT_TRUE(street.render.motion_blur);
+  const Status bad = apply_preset("impossible", SceneProfile::kIndoor, easy);
   ASSERT_FALSE(bad.ok());
-  EXPECT_THAT(std::string(bad.message()), HasSubstr("easy, realistic"));
+  EXPECT_THAT(std::string(bad.message()), HasSubstr("easy, realistic, hard"));
   EXPECT_NE(default_options(SceneProfile::kOutdoor).imu.gravity_magnitude,
             default_options(SceneProfile::kIndoor).imu.gravity_magnitude);
   EXPECT_FALSE(parse_profile("underwater").ok());

@@ -172,8 +172,8 @@ TEST(GeneratorGnss, ProfilesAndPresetsSetTheGnssKnobs) {
   EXPECT_EQ(outdoor.gnss.outlier_m, 15.0);
   SimulatorOptions easy = outdoor;
   SimulatorOptions realistic = outdoor;
-  ASSERT_TRUE(apply_preset("easy", easy).ok());
-  ASSERT_TRUE(apply_preset("realistic", realistic).ok());
+  ASSERT_TRUE(apply_preset("easy", SceneProfile::kOutdoor, easy).ok());
+  ASSERT_TRUE(apply_preset("realistic", SceneProfile::kOutdoor, realistic).ok());
   EXPECT_TRUE(easy.gnss.enabled);
   EXPECT_EQ(easy.gnss.outlier_probability, 0.0);
   EXPECT_TRUE(realistic.gnss.enabled);
