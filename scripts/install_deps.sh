@@ -22,7 +22,7 @@ BUILD_PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 # experiment scripts
-EXPERIMENT_PACKAGES=(iproute2 nftables tshark python3 python3-numpy python3-matplotlib)
+EXPERIMENT_PACKAGES=(iproute2 nftables tshark python3 python3-numpy python3-matplotlib python3-yaml)
 PACKAGES=("${BUILD_PACKAGES[@]}" "${EXPERIMENT_PACKAGES[@]}")
 
 # scripts/containers.sh: podman as root with runc (containers.md), netavark networks, an offline

@@ -11,7 +11,8 @@
 //       [--query-pose-source gt] [--stage1-mode msckf_nullspace]
 //       [--groundtruth FILE] [--set estimator.msckf.sigma_px=1.5] [--frames N]
 //
-// stdout: "KEY: value" lines (frames, timing columns a-e, link figures); logs and progress
+// stdout: "KEY: value" lines (frames, timing columns a-e, link figures, the final calibration
+// CALIB_*); logs and progress
 // on stderr. Exit codes: 0 success, 1 data error (named), 2 usage or configuration error.
 #include <algorithm>
 #include <chrono>
@@ -264,6 +265,22 @@ void print_report(const Report& r, double wall_s) {
   fmt::print("POSES_NEVER_IN_MAP_FRAME: {}\n", r.poses.never_mapped());
 }
 
+/// The filter's calibration at the end (the written one unless estimator.state.calib_* moved
+/// it; scripts/lib/calib_vs_truth.py compares it with a generated sequence's truth):
+/// CALIB_TIME_OFFSET_MS, per camera CALIB_CAMk_T_B_C (x y z qx qy qz qw) and CALIB_CAMk_INTRINSICS.
+void print_calibration(const mrvs::edge::State* s) {
+  if (s == nullptr) return;
+  fmt::print("CALIB_TIME_OFFSET_MS: {:.4f}\n", 1e3 * s->time_offset_s);
+  for (std::size_t c = 0; c < 2; ++c) {
+    const mrvs::SE3d& T = s->cams[c].T_b_c;
+    const auto q = T.quaternion();
+    fmt::print("CALIB_CAM{}_T_B_C: {:.6f} {:.6f} {:.6f} {:.9f} {:.9f} {:.9f} {:.9f}\n", c,
+               T.translation().x(), T.translation().y(), T.translation().z(), q.x(), q.y(), q.z(), q.w());
+    std::vector<double> params(s->cams[c].model->params().data(), s->cams[c].model->params().data() + 8);
+    fmt::print("CALIB_CAM{}_INTRINSICS: {:.6f}\n", c, fmt::join(params, " "));
+  }
+}
+
 /// IMU samples dropped by --imu-outage: [from_ns, to_ns) (IMU clock).
 struct Outage {
   mrvs::TimestampNs from_ns = 0, to_ns = 0;
@@ -500,6 +517,7 @@ int run(const Args& a) {
     }
   }
   print_report(report, wall);
+  print_calibration(vio->estimator().state());
   fmt::print("TRAJECTORY_FRAME: {}\n", mapped ? "map" : "odometry");
   if (out.empty()) {
     fmt::print(stderr, "edge_client: error: never initialised ({})\n", vio->estimator().waiting_reason());

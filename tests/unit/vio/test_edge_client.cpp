@@ -2,6 +2,7 @@
 // short realistic clip, determinism, and what bad datasets give (a named error or a logged
 // skip, never a crash or a silent wrong result).
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -9,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "mrvs/config/calibration.h"
 #include "mrvs/eval/trajectory_eval.h"
 #include "mrvs/io/trajectory_io.h"
 #include "mrvs/test/generated_sequence.h"
@@ -117,6 +119,28 @@ TEST(EdgeClient, OnlineTimeOffsetCalibrationFeedsTheImuThroughItsEstimate) {
             value_of(r.output, "FRAMES") - value_of(r.output, "INITIALIZED_AT_FRAME"))
       << r.output;
   EXPECT_LT(ate_se3(dir / "traj.txt", seq), 0.15);
+  // The estimate it ends with (CALIB_TIME_OFFSET_MS) found the shift.
+  EXPECT_NEAR(value_of(r.output, "CALIB_TIME_OFFSET_MS"), 1.0, 0.3) << r.output;
+}
+
+// Without online calibration the run ends with the calibration it read.
+TEST(EdgeClient, TheFinalCalibrationIsPrintedAndIsTheWrittenOneWhenNotEstimated) {
+  const mrvs::test::TempDir dir;
+  const auto r = edge_client(clip(), dir / "traj.txt");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(value_of(r.output, "CALIB_TIME_OFFSET_MS"), 0.0);
+  const auto cam1 = config::load_euroc_camera_yaml(clip() / "mav0/cam1/sensor.yaml");
+  ASSERT_TRUE(cam1.ok()) << cam1.status();
+  // "CALIB_CAM1_INTRINSICS: fx fy cx cy ...": the first value is fx.
+  EXPECT_NEAR(value_of(r.output, "CALIB_CAM1_INTRINSICS"), cam1->model->fx(), 1e-6);
+  const std::string key = "CALIB_CAM1_T_B_C: ";
+  const std::size_t at = r.output.find(key);
+  ASSERT_NE(at, std::string::npos) << r.output;
+  double x = 0, y = 0, z = 0;
+  ASSERT_EQ(std::sscanf(r.output.c_str() + at + key.size(), "%lf %lf %lf", &x, &y, &z), 3);
+  EXPECT_NEAR(x, cam1->T_b_c.translation().x(), 1e-6);
+  EXPECT_NEAR(y, cam1->T_b_c.translation().y(), 1e-6);
+  EXPECT_NEAR(z, cam1->T_b_c.translation().z(), 1e-6);
 }
 
 TEST(EdgeClient, PlainVioTracksARealisticClip) {
