@@ -129,16 +129,21 @@ double PixelPhotometry::noise(double clean, int u, int v) const {
   return noise_sigma(clean) * (u % 2 == 0 ? n.first : n.second);
 }
 
+namespace {
+
+/// A signal in DN rounded and clipped to 8 bits.
+std::uint8_t to_dn(double value) {
+  return static_cast<std::uint8_t>(std::clamp(std::round(value), 0.0, 255.0));
+}
+
+}  // namespace
+
 std::uint8_t PixelPhotometry::dn(double radiance, int u, int v) const {
   const double clean = clean_value(radiance, u, v);
-  const double value = std::round(clean + noise(clean, u, v));
-  return static_cast<std::uint8_t>(std::clamp(value, 0.0, 255.0));
+  return to_dn(clean + noise(clean, u, v));
 }
 
 void PixelPhotometry::dn_row(const float* radiance, float scale, int v, int width, std::uint8_t* out) const {
-  auto to_dn = [](double value) {
-    return static_cast<std::uint8_t>(std::clamp(std::round(value), 0.0, 255.0));
-  };
   for (int u = 0; u < width; u += 2) {
     const double c0 = clean_value(radiance[u] * scale, u, v);
     if (!has_noise_) {
